@@ -1,0 +1,106 @@
+#include "apps/ToolOptions.h"
+
+#include "cutters/Error.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace engage::app {
+
+void addToolOptions(CLI::App& command, ToolOptions& o, bool required) {
+  auto* tool = command.add_option("--tool", o.tool,
+                                  "cutter: flat, ball, bull, taper, tapered-ball, chamfer, apt");
+  tool->check(CLI::IsMember({"flat", "ball", "bull", "taper", "tapered-ball", "chamfer", "apt"}));
+  auto* diameter = command.add_option(
+      "--diameter", o.diameter,
+      "cutter diameter D (tip diameter of a taper, ball diameter of a tapered ball), e.g. 12mm");
+  if (required) {
+    tool->required();
+    diameter->required();
+  }
+  command.add_option("--corner-radius", o.cornerRadius, "corner radius r_tc (bull, apt)");
+  command.add_option("--taper-angle", o.taperAngle,
+                     "side angle beta to the tool axis (taper, tapered-ball, apt), e.g. 30deg");
+  command.add_option("--tip-angle", o.tipAngle, "included tip angle (chamfer), e.g. 90deg");
+  command.add_option("--bottom-angle", o.bottomAngle,
+                     "lower-line angle delta above the horizontal (apt)");
+  command.add_option(
+      "--flute-length", o.fluteLength,
+      "cutting height h above the tip (default 3 D, at least the cone of a chamfer)");
+  command.add_option("--flutes", o.flutes, "number of flutes")->capture_default_str();
+}
+
+std::optional<double> optionalQuantity(const std::string& text, Dimension dim, UnitSystem bare,
+                                       const char* optionName) {
+  if (text.empty()) return std::nullopt;
+  return parseQuantity(text, dim, bare, optionName).value;
+}
+
+AptCutter buildCutter(const ToolOptions& o, UnitSystem bare) {
+  const double diameter = parseQuantity(o.diameter, Dimension::Length, bare, "--diameter").value;
+  const auto corner = optionalQuantity(o.cornerRadius, Dimension::Length, bare, "--corner-radius");
+  const auto taper = optionalQuantity(o.taperAngle, Dimension::Angle, bare, "--taper-angle");
+  const auto tip = optionalQuantity(o.tipAngle, Dimension::Angle, bare, "--tip-angle");
+  const auto bottom = optionalQuantity(o.bottomAngle, Dimension::Angle, bare, "--bottom-angle");
+  const auto flute = optionalQuantity(o.fluteLength, Dimension::Length, bare, "--flute-length");
+
+  auto only = [&](bool given, const char* option, std::initializer_list<const char*> tools) {
+    if (!given) return;
+    if (std::find_if(tools.begin(), tools.end(), [&](const char* t) { return o.tool == t; }) !=
+        tools.end())
+      return;
+    std::string list;
+    for (const char* t : tools)
+      list += (list.empty() ? "" : ", ") + std::string(t);
+    throw ParameterError(std::string(option) + " does not apply to a " + o.tool +
+                         " cutter (it applies to: " + list + ")");
+  };
+  only(corner.has_value(), "--corner-radius", {"bull", "apt"});
+  only(taper.has_value(), "--taper-angle", {"taper", "tapered-ball", "apt"});
+  only(tip.has_value(), "--tip-angle", {"chamfer"});
+  only(bottom.has_value(), "--bottom-angle", {"apt"});
+
+  const double h = flute.value_or(3.0 * diameter);
+  if (o.tool == "flat") return AptCutter::flat(diameter, h, o.flutes);
+  if (o.tool == "ball") return AptCutter::ball(diameter, h, o.flutes);
+  if (o.tool == "bull") {
+    if (!corner) throw ParameterError("a bull cutter needs --corner-radius");
+    return AptCutter::bull(diameter, *corner, h, o.flutes);
+  }
+  if (o.tool == "taper") {
+    if (!taper) throw ParameterError("a taper cutter needs --taper-angle");
+    return AptCutter::taper(diameter, *taper, h, o.flutes);
+  }
+  if (o.tool == "tapered-ball") {
+    if (!taper) throw ParameterError("a tapered-ball cutter needs --taper-angle");
+    return AptCutter::taperedBall(diameter, *taper, h, o.flutes);
+  }
+  if (o.tool == "chamfer") {
+    if (!tip) throw ParameterError("a chamfer cutter needs --tip-angle (e.g. 90deg)");
+    // Default cutting height: 3 D, raised to the top of the cone when that is taller.
+    const double cone = diameter / 2.0 / std::tan(*tip / 2.0);
+    return AptCutter::chamfer(diameter, *tip, flute.value_or(std::max(h, cone)), o.flutes);
+  }
+  // apt: r = D/2, e = r - r_tc, h_tc implied.
+  AptParameters p;
+  p.radius = diameter / 2.0;
+  p.cornerRadius = corner.value_or(0.0);
+  p.cornerCenterRadial = std::max(0.0, p.radius - p.cornerRadius);
+  p.taperAngleRad = taper.value_or(0.0);
+  p.bottomAngleRad = bottom.value_or(0.0);
+  p.height = h;
+  return AptCutter::fromApt(p, o.flutes, CutterShape::General);
+}
+
+UnitSystem chooseUnitSystem(const std::string& unitsOption,
+                            const std::vector<std::pair<std::string, Dimension>>& typed) {
+  if (unitsOption == "mm") return UnitSystem::Metric;
+  if (unitsOption == "in") return UnitSystem::Inch;
+  if (!unitsOption.empty())
+    throw UnitError("--units: expected mm or in, found '" + unitsOption + "'");
+  for (const auto& [text, dim] : typed)
+    if (const auto sys = suffixSystem(text, dim)) return *sys;
+  return UnitSystem::Metric;
+}
+
+}  // namespace engage::app

@@ -1,0 +1,47 @@
+#pragma once
+/// \file ToolOptions.h
+/// The cutter options shared by every `engage` subcommand that needs a tool (--tool,
+/// --diameter, --corner-radius, --taper-angle, --tip-angle, --bottom-angle, --flute-length,
+/// --flutes), and the choice of unit system from what the user typed.
+
+#include "cutters/AptCutter.h"
+#include "engine/units/Quantity.h"
+
+#include <CLI/CLI.hpp>
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace engage::app {
+
+/// The raw option strings of a cutter, parsed by buildCutter.
+struct ToolOptions {
+  std::string tool;
+  std::string diameter;
+  std::string cornerRadius;
+  std::string taperAngle;
+  std::string tipAngle;
+  std::string bottomAngle;
+  std::string fluteLength;
+  int flutes = 2;
+};
+
+/// Register the tool options on a subcommand. `required` makes --tool and --diameter required.
+void addToolOptions(CLI::App& command, ToolOptions& options, bool required);
+
+/// Build the cutter; bare numbers are read in `bare`. Throws UnitError or ParameterError,
+/// e.g. when an option does not fit the tool ("--corner-radius applies to bull and apt").
+AptCutter buildCutter(const ToolOptions& options, UnitSystem bare);
+
+/// The report unit system: --units if given ("mm" or "in"; anything else throws UnitError),
+/// else the system of the first value in `typed` whose suffix names one, else metric.
+UnitSystem chooseUnitSystem(const std::string& unitsOption,
+                            const std::vector<std::pair<std::string, Dimension>>& typed);
+
+/// Parse an optional quantity option: nullopt when the option string is empty.
+std::optional<double> optionalQuantity(const std::string& text, Dimension dim, UnitSystem bare,
+                                       const char* optionName);
+
+}  // namespace engage::app

@@ -1,0 +1,39 @@
+/// \file main.cpp
+/// The `engage` command line: one executable, subcommands. Library errors are caught here,
+/// printed as one line on stderr, and turned into a non-zero exit status:
+/// 0 success, 1 invalid input (a parameter, a unit, a file), 2 command-line usage,
+/// 3 internal error.
+
+#include "apps/AnalyzeCommand.h"
+#include "cutters/Error.h"
+
+#include <CLI/CLI.hpp>
+
+#include <exception>
+#include <functional>
+#include <iostream>
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "engage: material-engagement simulator and adaptive feedrate scheduler for CNC "
+      "milling"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "engage 0.1.0");
+  std::function<int()> run;
+  engage::app::addAnalyzeCommand(app, run);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version exit 0; every other usage error exits 2 with CLI11's message.
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  try {
+    return run ? run() : 2;
+  } catch (const engage::Error& e) {
+    std::cerr << "engage: error: " << e.what() << '\n';
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "engage: internal error: " << e.what() << '\n';
+    return 3;
+  }
+}

@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Install the Debian packages engage builds and runs with (Debian 12; run as root).
+set -euo pipefail
+packages=(
+  cmake make g++ ccache
+  libeigen3-dev libtbb-dev libopenvdb-dev libopenvdb-tools zlib1g-dev libboost-iostreams-dev
+  libopenmesh-dev libcli11-dev nlohmann-json3-dev libpolyclipping-dev catch2
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "install-deps: installing ${missing[*]}"
+  apt-get update
+  DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends "${missing[@]}"
+fi

@@ -1,0 +1,115 @@
+// Tests of engine/model/EngagementModel.h: Eq 6, 12-24 against hand values.
+// Inch cases run with inch numbers in the mm slots (the model is linear in scale), except
+// where units matter (force, acceleration), which use real mm.
+
+#include "engine/model/EngagementModel.h"
+#include "cutters/Error.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+using namespace engage;
+using Catch::Matchers::Contains;
+
+namespace {
+constexpr double kRel = 1e-12;  // closed forms on both sides: only round-off differs
+constexpr double kPi = 3.14159265358979323846;
+}  // namespace
+
+TEST_CASE("linear MRR is area times feed (Eq 6)", "[model]") {
+  const EngagementModel m(AptCutter::flat(1.0, 3.0), 0.5, 0.3);
+  CHECK(m.mrr(100.0, {}) == Approx(15.0).epsilon(kRel));
+  CHECK(m.mrrPaper(100.0, {}) == Approx(15.0).epsilon(kRel));
+}
+
+TEST_CASE("flat D 1 on a circle of tool-centre radius 1: exact and paper forms", "[model]") {
+  // Area 0.15, centroid x = 0.25, z = 0.15.
+  const EngagementModel m(AptCutter::flat(1.0, 3.0), 0.5, 0.3);
+  const PathShape concave{PathSide::Concave, 1.0};
+  const PathShape convex{PathSide::Convex, 1.0};
+  // Exact (Pappus): 0.15 x 100 x (1 +- 0.25) / 1.
+  CHECK(m.mrr(100.0, concave) == Approx(18.75).epsilon(kRel));
+  CHECK(m.mrr(100.0, convex) == Approx(11.25).epsilon(kRel));
+  // Paper: R = 1.5 (concave) / 0.5 (convex), m = sqrt(0.25^2 + 0.15^2) = 0.2915476.
+  const double mm = std::sqrt(0.0625 + 0.0225);
+  CHECK(m.paperCentroidDistance() == Approx(mm).epsilon(kRel));
+  CHECK(m.mrrPaper(100.0, concave) == Approx(15.0 * (1.5 - mm) / (1.5 - 0.5)).epsilon(kRel));
+  CHECK(m.mrrPaper(100.0, convex) == Approx(15.0 * (0.5 + mm) / (0.5 + 0.5)).epsilon(kRel));
+}
+
+TEST_CASE("with a horizontal m the paper's Eq 12/13 equal the exact ratio", "[model]") {
+  // A cross-section whose centroid lies at the tip height would make the paper exact; check
+  // the algebra instead: (R - (r - x)) / (R - r) with R = rho + r is (rho + x) / rho.
+  const EngagementModel m(AptCutter::ball(1.0, 3.0), 0.5, 0.3);
+  const double rho = 2.0;
+  const double x = m.exact().centroidX;
+  const double R = m.paperPathRadius({PathSide::Concave, rho});
+  CHECK(R == Approx(2.5).epsilon(kRel));
+  CHECK((R - (0.5 - x)) / (R - 0.5) ==
+        Approx(m.centroidSpeedRatio({PathSide::Concave, rho})).epsilon(kRel));
+}
+
+TEST_CASE("curved MRR for R/D from 1 to 50: concave > linear > convex, converging", "[model]") {
+  for (const AptCutter& c : {AptCutter::flat(1.0, 3.0), AptCutter::bull(1.0, 0.2, 3.0),
+                             AptCutter::ball(1.0, 3.0), AptCutter::taper(1.0, 0.5235987756, 3.0)}) {
+    const EngagementModel m(c, 0.5, 0.3);
+    const double linear = m.mrr(100.0, {});
+    double previousGap = 1e300;
+    for (double q : {1.0, 1.5, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0}) {
+      const double concave = m.mrr(100.0, {PathSide::Concave, q});
+      const double convex = m.mrr(100.0, {PathSide::Convex, q});
+      CHECK(concave > linear);
+      CHECK(linear > convex);
+      // The gap is exactly x_bar / rho of the linear MRR: it shrinks as 1/R.
+      const double gap = concave / linear - 1.0;
+      CHECK(gap == Approx(m.exact().centroidX / q).epsilon(1e-10));
+      CHECK(gap < previousGap);
+      previousGap = gap;
+      const double concavePaper = m.mrrPaper(100.0, {PathSide::Concave, q});
+      const double convexPaper = m.mrrPaper(100.0, {PathSide::Convex, q});
+      CHECK(concavePaper > m.mrrPaper(100.0, {}));
+      CHECK(convexPaper < m.mrrPaper(100.0, {}));
+    }
+    // At R/D = 50 within 1 % of linear (gap = x_bar / 50 <= 0.5 / 50).
+    CHECK(m.mrr(100.0, {PathSide::Concave, 50.0}) == Approx(linear).epsilon(0.01));
+  }
+}
+
+TEST_CASE("adaptive feed holds the target MRR (Eq 21-23)", "[model]") {
+  const EngagementModel m(AptCutter::bull(1.0, 0.25, 3.0), 0.6, 0.3);
+  for (const PathShape& path :
+       {PathShape{}, PathShape{PathSide::Concave, 1.5}, PathShape{PathSide::Convex, 1.5}}) {
+    CHECK(m.mrr(m.adaptiveFeed(12.0, path), path) == Approx(12.0).epsilon(kRel));
+    CHECK(m.mrrPaper(m.adaptiveFeedPaper(12.0, path), path) == Approx(12.0).epsilon(kRel));
+  }
+  // Concave: slower than linear; convex: faster.
+  CHECK(m.adaptiveFeed(12.0, {PathSide::Concave, 1.5}) < m.adaptiveFeed(12.0, {}));
+  CHECK(m.adaptiveFeed(12.0, {PathSide::Convex, 1.5}) > m.adaptiveFeed(12.0, {}));
+}
+
+TEST_CASE("arcs tighter than the cutter have no steady state", "[model]") {
+  const EngagementModel m(AptCutter::flat(10.0, 30.0), 5.0, 3.0);
+  CHECK_THROWS_WITH(m.mrr(1000.0, {PathSide::Concave, 4.0}), Contains("path radius = 4 mm"));
+  CHECK_THROWS_WITH(m.mrr(1000.0, {PathSide::Convex, -1.0}), Contains("must be positive"));
+  CHECK_NOTHROW(m.mrr(1000.0, {PathSide::Convex, 5.0}));
+}
+
+TEST_CASE("force from specific energy and spindle speed (Eq 17-18)", "[model]") {
+  // 1 in^3/min = 16387.064 mm^3/min = 273.1177 W at E = 1 J/mm^3; D 25.4 mm at 1000 rpm:
+  // v = pi 25.4 1000 mm/min = 1.3299409 m/s; F = P / v = 205.3608 N.
+  const double v = cuttingSpeed(25.4, 1000.0);
+  CHECK(v == Approx(kPi * 25400.0).epsilon(kRel));
+  const double watts = 16387.064 / 60.0;
+  CHECK(tangentialForce(16387.064, 1.0, v) == Approx(watts / (v / 60000.0)).epsilon(kRel));
+  CHECK(tangentialForce(16387.064, 1.0, v) == Approx(205.3608).epsilon(1e-6));
+  CHECK_THROWS_AS(tangentialForce(1.0, 1.0, 0.0), ParameterError);
+}
+
+TEST_CASE("tangential acceleration between successive feeds (Eq 24)", "[model]") {
+  // 60 -> 120 mm/min (1 -> 2 mm/s) over 1.5 mm: a = (4 - 1) / 3 = 1 mm/s^2, dt = 3 / 3 = 1 s.
+  CHECK(tangentialAcceleration(60.0, 120.0, 1.5) == Approx(1.0).epsilon(kRel));
+  CHECK(transitionTime(60.0, 120.0, 1.5) == Approx(1.0).epsilon(kRel));
+  CHECK(tangentialAcceleration(120.0, 60.0, 1.5) == Approx(-1.0).epsilon(kRel));
+  CHECK_THROWS_AS(tangentialAcceleration(60.0, 120.0, 0.0), ParameterError);
+}
