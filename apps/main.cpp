@@ -5,6 +5,7 @@
 /// 3 internal error.
 
 #include "apps/AnalyzeCommand.h"
+#include "apps/MovesCommand.h"
 #include "cutters/Error.h"
 
 #include <CLI/CLI.hpp>
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "engage 0.1.0");
   std::function<int()> run;
   engage::app::addAnalyzeCommand(app, run);
+  engage::app::addMovesCommand(app, run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,72 @@
+#include "apps/MovesCommand.h"
+
+#include "engine/gcode/GcodeReader.h"
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace engage::app {
+namespace {
+
+struct MovesOptions {
+  std::string program;
+  std::string toolTable;
+  std::string toolTableUnits = "mm";
+  bool blockDelete = false;
+};
+
+int runMoves(const MovesOptions& o) {
+  ReaderOptions reader;
+  reader.toolTable = o.toolTable;
+  reader.toolTableInch = o.toolTableUnits == "in";
+  reader.blockDelete = o.blockDelete;
+  const Toolpath path = readProgram(o.program, reader);
+  // Format the whole table before printing it: an error leaves no partial output.
+  std::string out = "line,kind,x,y,z,cx,cy,cz,plane,turns,feed_mm_min\n";
+  char buf[256];
+  auto row = [&](const Move& m, const Eigen::Vector3d& p) {
+    std::snprintf(buf, sizeof buf, "%d,%s,%.6f,%.6f,%.6f,", m.line, moveKindName(m.kind), p.x(),
+                  p.y(), p.z());
+    out += buf;
+    if (m.kind == MoveKind::Arc) {
+      std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%s,%d,", m.center.x(), m.center.y(),
+                    m.center.z(), planeName(m.plane), m.turns);
+      out += buf;
+    } else {
+      out += ",,,,,";
+    }
+    if (m.kind != MoveKind::Rapid) {
+      std::snprintf(buf, sizeof buf, "%.6g", m.feed);
+      out += buf;
+    }
+    out += '\n';
+  };
+  for (const Move& m : path.moves) {
+    if (m.kind == MoveKind::Spline) {
+      for (const Eigen::Vector3d& p : m.points)
+        row(m, p);
+    } else {
+      row(m, m.end);
+    }
+  }
+  std::fwrite(out.data(), 1, out.size(), stdout);
+  return 0;
+}
+
+}  // namespace
+
+void addMovesCommand(CLI::App& app, std::function<int()>& run) {
+  auto o = std::make_shared<MovesOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "moves", "print the interpreted moves of a G-code program as CSV (mm, machine coordinates)");
+  cmd->add_option("program", o->program, "G-code program (.ngc, .nc, .tap, .gcode)")->required();
+  cmd->add_option("--tool-table", o->toolTable, "LinuxCNC tool table for G43");
+  cmd->add_option("--tool-table-units", o->toolTableUnits, "units of the tool table: mm or in")
+      ->check(CLI::IsMember({"mm", "in"}))
+      ->capture_default_str();
+  cmd->add_flag("--block-delete", o->blockDelete, "skip lines starting with '/'");
+  cmd->callback([o, &run] { run = [o] { return runMoves(*o); }; });
+}
+
+}  // namespace engage::app

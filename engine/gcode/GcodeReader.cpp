@@ -1,0 +1,1506 @@
+#include "engine/gcode/GcodeReader.h"
+
+#include "engine/gcode/GcodeError.h"
+#include "engine/gcode/LineParser.h"
+#include "engine/gcode/Spline.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace engage {
+namespace {
+
+using Eigen::Vector3d;
+using gcode::Block;
+using gcode::ParseFailure;
+
+constexpr double kInch = 25.4;
+constexpr double kHalfPi = 1.57079632679489661923;
+constexpr int kParameterCount = 5602;  // #1 .. #5602, as LinuxCNC
+/// Spline flattening tolerance, mm (Toolpath.h promises 0.001 mm).
+constexpr double kSplineTolerance = 0.001;
+/// LinuxCNC's arc radius-mismatch tolerances (TOLERANCE_MM, TOLERANCE_INCH).
+constexpr double kArcToleranceMm = 0.005;
+constexpr double kArcToleranceInch = 0.0005;
+/// LinuxCNC's G83/G73 rapid clearance above the last peck: 0.010 in.
+constexpr double kPeckClearanceInch = 0.010;
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+/// G or M number times ten, e.g. G5.2 -> 52, G90.1 -> 901.
+int codeOf(double value) {
+  return static_cast<int>(std::lround(value * 10.0));
+}
+std::string codeName(char letter, int code) {
+  std::string s(1, letter);
+  s += std::to_string(code / 10);
+  if (code % 10) s += "." + std::to_string(code % 10);
+  return s;
+}
+
+/// Modal group of a G code (x10), -1 if unknown.
+int gGroup(int g) {
+  switch (g) {
+    case 0:
+    case 10:
+    case 20:
+    case 30:
+    case 50:
+    case 51:
+    case 52:
+    case 53:
+    case 330:
+    case 331:
+    case 382:
+    case 383:
+    case 384:
+    case 385:
+    case 730:
+    case 760:
+    case 800:
+    case 810:
+    case 820:
+    case 830:
+    case 840:
+    case 850:
+    case 860:
+    case 870:
+    case 880:
+    case 890:
+      return 1;
+    case 170:
+    case 171:
+    case 180:
+    case 181:
+    case 190:
+    case 191:
+      return 2;
+    case 900:
+    case 910:
+      return 3;
+    case 901:
+    case 911:
+      return 4;
+    case 930:
+    case 940:
+    case 950:
+      return 5;
+    case 200:
+    case 210:
+      return 6;
+    case 400:
+    case 410:
+    case 411:
+    case 420:
+    case 421:
+      return 7;
+    case 430:
+    case 431:
+    case 432:
+    case 490:
+      return 8;
+    case 980:
+    case 990:
+      return 10;
+    case 540:
+    case 550:
+    case 560:
+    case 570:
+    case 580:
+    case 590:
+    case 591:
+    case 592:
+    case 593:
+      return 12;
+    case 610:
+    case 611:
+    case 640:
+      return 13;
+    case 960:
+    case 970:
+      return 14;
+    case 70:
+    case 80:
+      return 15;
+    case 40:
+    case 100:
+    case 280:
+    case 281:
+    case 300:
+    case 301:
+    case 530:
+    case 920:
+    case 921:
+    case 922:
+    case 923:
+    case 520:
+      return 0;
+    default:
+      return -1;
+  }
+}
+
+int mGroup(int m) {
+  switch (m / 10) {
+    case 0:
+    case 1:
+    case 2:
+    case 30:
+    case 60:
+      return 4;
+    case 6:
+    case 61:
+      return 6;
+    case 3:
+    case 4:
+    case 5:
+      return 7;
+    case 7:
+    case 8:
+    case 9:
+      return 8;
+    case 48:
+    case 49:
+    case 50:
+    case 51:
+    case 52:
+    case 53:
+      return 9;
+    case 62:
+    case 63:
+    case 64:
+    case 65:
+    case 66:
+    case 67:
+    case 68:
+      return 5;
+    case 70:
+    case 71:
+    case 72:
+    case 73:
+      return 10;
+    default:
+      return -1;
+  }
+}
+
+/// One loaded source file with its O-word index.
+struct SourceFile {
+  std::string name;
+  std::string folder;
+  std::vector<std::string> lines;
+  /// label -> (line index, keyword), in line order.
+  std::unordered_map<std::string, std::vector<std::pair<int, std::string>>> labels;
+};
+
+std::vector<std::string> splitLines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(start, end - start);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    lines.push_back(std::move(line));
+    if (end == text.size()) break;
+    start = end + 1;
+  }
+  if (!lines.empty() && lines.back().empty()) lines.pop_back();
+  return lines;
+}
+
+std::unique_ptr<SourceFile> makeSource(const std::string& name, const std::string& text) {
+  auto f = std::make_unique<SourceFile>();
+  f->name = name;
+  f->folder = std::filesystem::path(name).parent_path().string();
+  f->lines = splitLines(text);
+  std::string label;
+  std::string keyword;
+  for (std::size_t i = 0; i < f->lines.size(); ++i)
+    if (gcode::peekOWord(f->lines[i], label, keyword))
+      f->labels[label].emplace_back(static_cast<int>(i), keyword);
+  return f;
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("cannot read program '" + path + "': no such file or not readable");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+enum class FeedMode { UnitsPerMinute, InverseTime, UnitsPerRevolution };
+
+/// The interpreter: modal state, parameters, call stack, and the moves it emits.
+class Interpreter final : public gcode::ParameterSource {
+ public:
+  Interpreter(const ReaderOptions& options) : options_(options) {
+    params_.assign(kParameterCount + 1, 0.0);
+    params_[5220] = 1.0;  // G54
+    if (!options.toolTable.empty()) readToolTable(options.toolTable);
+  }
+
+  Toolpath run(std::unique_ptr<SourceFile> main) {
+    files_.push_back(std::move(main));
+    out_.files.push_back(files_[0]->name);
+    execute();
+    out_.inch = inch_;
+    return std::move(out_);
+  }
+
+  // ParameterSource
+  double numbered(int n) const override {
+    if (n < 1 || n > kParameterCount)
+      throw std::out_of_range("expected a parameter number in 1.." +
+                              std::to_string(kParameterCount) + ", found #" + std::to_string(n));
+    if (n >= 5420 && n <= 5422) return programPosition()[n - 5420];
+    if (n == 5400) return tool_;
+    return params_[static_cast<std::size_t>(n)];
+  }
+  bool named(const std::string& name, double& value) const override {
+    if (!name.empty() && name[0] == '_') {
+      if (name == "_x" || name == "_y" || name == "_z") {
+        value = programPosition()[name[1] - 'x'];
+        return true;
+      }
+      if (name == "_metric") {
+        value = inch_ ? 0.0 : 1.0;
+        return true;
+      }
+      if (name == "_imperial") {
+        value = inch_ ? 1.0 : 0.0;
+        return true;
+      }
+      if (name == "_absolute") {
+        value = incremental_ ? 0.0 : 1.0;
+        return true;
+      }
+      if (name == "_incremental") {
+        value = incremental_ ? 1.0 : 0.0;
+        return true;
+      }
+      if (name == "_feed") {
+        value = feed_ / unit();
+        return true;
+      }
+      if (name == "_rpm") {
+        value = spindleSpeed_;
+        return true;
+      }
+      if (name == "_current_tool") {
+        value = tool_;
+        return true;
+      }
+      if (name == "_call_level") {
+        value = static_cast<double>(frames_.size());
+        return true;
+      }
+      if (name == "_task") {
+        value = 0.0;
+        return true;
+      }  // not running under a machine's task
+      const auto it = globals_.find(name);
+      if (it == globals_.end()) return false;
+      value = it->second;
+      return true;
+    }
+    const auto& locals = frames_.empty() ? topLocals_ : frames_.back().locals;
+    const auto it = locals.find(name);
+    if (it == locals.end()) return false;
+    value = it->second;
+    return true;
+  }
+
+ private:
+  struct Frame {
+    int file;
+    int returnLine;
+    std::array<double, 30> saved{};
+    std::unordered_map<std::string, double> locals;
+  };
+
+  // ---------------------------------------------------------------- errors
+  [[noreturn]] void fail(int column, const std::string& message) const {
+    throw GcodeError(files_[static_cast<std::size_t>(file_)]->name, line_ + 1, column, message);
+  }
+
+  // ---------------------------------------------------------------- units and frames
+  double unit() const { return inch_ ? kInch : 1.0; }
+  Vector3d workOffset() const {
+    const int cs = static_cast<int>(params_[5220]);
+    const std::size_t base = static_cast<std::size_t>(5221 + 20 * (cs - 1));
+    Vector3d o(params_[base], params_[base + 1], params_[base + 2]);
+    if (params_[5210] != 0.0) o += Vector3d(params_[5211], params_[5212], params_[5213]);
+    return o * unit();  // offsets are kept in program units, as LinuxCNC does
+  }
+  Vector3d programPosition() const { return (pos_ - workOffset()) / unit(); }
+  Vector3d toMachine(const Vector3d& program) const { return program * unit() + workOffset(); }
+
+  /// Converts every stored length parameter when G20/G21 changes the program units.
+  void convertStoredLengths(double factor) {
+    auto scale = [&](std::size_t first, std::size_t count) {
+      for (std::size_t i = first; i < first + count; ++i)
+        params_[i] *= factor;
+    };
+    scale(5161, 3);
+    scale(5181, 3);
+    scale(5211, 3);
+    for (int cs = 0; cs < 9; ++cs)
+      scale(static_cast<std::size_t>(5221 + 20 * cs), 3);
+  }
+
+  // ---------------------------------------------------------------- tool table
+  void readToolTable(const std::string& path) {
+    std::istringstream in(readFile(path));
+    std::string line;
+    while (std::getline(in, line)) {
+      const std::size_t semi = line.find(';');
+      if (semi != std::string::npos) line.resize(semi);
+      std::istringstream words(line);
+      std::string w;
+      int tool = -1;
+      double length = 0.0;
+      while (words >> w) {
+        const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(w[0])));
+        const double v = std::strtod(w.c_str() + 1, nullptr);
+        if (c == 'T') tool = static_cast<int>(v);
+        if (c == 'Z') length = v;
+      }
+      if (tool >= 0) toolLengths_[tool] = length * (options_.toolTableInch ? kInch : 1.0);
+    }
+  }
+
+  // ---------------------------------------------------------------- the run loop
+  void execute() {
+    bool seenContent = false;
+    bool percentMode = false;
+    long long executed = 0;
+    while (true) {
+      const SourceFile& f = *files_[static_cast<std::size_t>(file_)];
+      if (line_ >= static_cast<int>(f.lines.size())) {
+        if (!frames_.empty()) {
+          line_ = static_cast<int>(f.lines.size()) - 1;
+          fail(1, "expected O-endsub closing the subroutine, found the end of the file");
+        }
+        return;
+      }
+      if (++executed > options_.maxExecutedLines)
+        fail(1, "expected the program to end, found more than " +
+                    std::to_string(options_.maxExecutedLines) +
+                    " executed lines (an endless loop?)");
+      Block block;
+      try {
+        block = gcode::parseLine(f.lines[static_cast<std::size_t>(line_)], *this);
+      } catch (const ParseFailure& e) {
+        fail(e.column, e.message);
+      }
+      if (block.percent) {
+        if (file_ == 0 && !seenContent) {
+          percentMode = true;
+          seenContent = true;
+          ++line_;
+          continue;
+        }
+        if (percentMode) return;  // the closing '%'
+        ++line_;
+        continue;
+      }
+      const bool empty = block.words.empty() && block.assignments.empty() && !block.hasOWord;
+      if (!empty) seenContent = true;
+      if (block.blockDelete && options_.blockDelete) {
+        ++line_;
+        continue;
+      }
+      if (block.hasOWord) {
+        controlFlow(block);
+        continue;
+      }
+      const bool end = executeBlock(block);
+      for (const gcode::Assignment& a : block.assignments)
+        assign(a);
+      if (end) return;
+      ++line_;
+    }
+  }
+
+  void assign(const gcode::Assignment& a) {
+    if (!a.name.empty()) {
+      if (a.name[0] == '_')
+        globals_[a.name] = a.value;
+      else
+        (frames_.empty() ? topLocals_ : frames_.back().locals)[a.name] = a.value;
+      return;
+    }
+    if (a.number >= 5420 && a.number <= 5422)
+      fail(a.column, "expected a writable parameter, found #" + std::to_string(a.number) +
+                         " (the current position) on the left of '='");
+    params_[static_cast<std::size_t>(a.number)] = a.value;
+  }
+
+  // ---------------------------------------------------------------- O-words
+  const std::vector<std::pair<int, std::string>>& labelEntries(const std::string& label,
+                                                               int column) const {
+    const SourceFile& f = *files_[static_cast<std::size_t>(file_)];
+    const auto it = f.labels.find(label);
+    if (it == f.labels.end()) fail(column, "expected a known O-word label, found o" + label);
+    return it->second;
+  }
+  /// First entry of `label` after line `from` whose keyword is one of `keywords`.
+  int findForward(const std::string& label, int from, std::initializer_list<const char*> keywords,
+                  int column, const char* expected) const {
+    for (const auto& [line, kw] : labelEntries(label, column))
+      if (line > from)
+        for (const char* k : keywords)
+          if (kw == k) return line;
+    fail(column, std::string("expected ") + expected + " for o" + label + ", found none");
+  }
+  int findBackward(const std::string& label, int from, const char* keyword, int column) const {
+    const auto& entries = labelEntries(label, column);
+    for (auto it = entries.rbegin(); it != entries.rend(); ++it)
+      if (it->first < from && it->second == keyword) return it->first;
+    fail(column, std::string("expected O-") + keyword + " opening o" + label + ", found none");
+  }
+  bool hasKeywordBefore(const std::string& label, int from, const char* keyword) const {
+    const SourceFile& f = *files_[static_cast<std::size_t>(file_)];
+    const auto it = f.labels.find(label);
+    if (it == f.labels.end()) return false;
+    for (const auto& [line, kw] : it->second)
+      if (line < from && kw == keyword) return true;
+    return false;
+  }
+
+  void controlFlow(const Block& b) {
+    const gcode::OWord& o = b.oword;
+    const std::string& k = o.keyword;
+    const int c = o.column;
+    if (k == "sub") {
+      line_ = findForward(o.label, line_, {"endsub"}, c, "O-endsub") + 1;
+    } else if (k == "endsub" || k == "return") {
+      if (frames_.empty()) fail(c, "expected to be inside a called subroutine, found O-" + k);
+      if (!o.arguments.empty()) globals_["_value"] = o.arguments[0];
+      Frame f = std::move(frames_.back());
+      frames_.pop_back();
+      for (std::size_t i = 0; i < 30; ++i)
+        params_[i + 1] = f.saved[i];
+      file_ = f.file;
+      line_ = f.returnLine;
+    } else if (k == "call") {
+      call(o);
+    } else if (k == "do") {
+      ++line_;
+    } else if (k == "while") {
+      const bool cond = o.arguments[0] != 0.0;
+      if (hasKeywordBefore(o.label, line_, "do")) {
+        // The tail of a do-while loop.
+        line_ = cond ? findBackward(o.label, line_, "do", c) + 1 : line_ + 1;
+      } else {
+        line_ = cond ? line_ + 1 : findForward(o.label, line_, {"endwhile"}, c, "O-endwhile") + 1;
+      }
+    } else if (k == "endwhile") {
+      line_ = findBackward(o.label, line_, "while", c);
+    } else if (k == "if") {
+      if (o.arguments[0] != 0.0) {
+        ++line_;
+      } else {
+        nextBranch(o.label, c);
+      }
+    } else if (k == "elseif") {
+      // Reached from inside a taken branch, or from nextBranch evaluating it.
+      line_ = findForward(o.label, line_, {"endif"}, c, "O-endif") + 1;
+    } else if (k == "else") {
+      line_ = findForward(o.label, line_, {"endif"}, c, "O-endif") + 1;
+    } else if (k == "endif") {
+      ++line_;
+    } else if (k == "repeat") {
+      const long count = std::lround(o.arguments[0]);
+      const auto key = std::make_pair(file_, line_);
+      if (count <= 0) {
+        repeats_.erase(key);
+        line_ = findForward(o.label, line_, {"endrepeat"}, c, "O-endrepeat") + 1;
+      } else {
+        repeats_[key] = count;
+        ++line_;
+      }
+    } else if (k == "endrepeat") {
+      const int start = findBackward(o.label, line_, "repeat", c);
+      const auto key = std::make_pair(file_, start);
+      auto it = repeats_.find(key);
+      if (it != repeats_.end() && --it->second > 0) {
+        line_ = start + 1;
+      } else {
+        if (it != repeats_.end()) repeats_.erase(it);
+        ++line_;
+      }
+    } else if (k == "break" || k == "continue") {
+      loopJump(o.label, k == "break", c);
+    }
+  }
+
+  /// From a false if/elseif at line_, move to the next branch that runs.
+  void nextBranch(const std::string& label, int column) {
+    int at = line_;
+    for (;;) {
+      const int next = findForward(label, at, {"elseif", "else", "endif"}, column, "O-endif");
+      const std::string& text =
+          files_[static_cast<std::size_t>(file_)]->lines[static_cast<std::size_t>(next)];
+      std::string l;
+      std::string kw;
+      gcode::peekOWord(text, l, kw);
+      if (kw == "elseif") {
+        const int saved = line_;
+        line_ = next;
+        Block b;
+        try {
+          b = gcode::parseLine(text, *this);
+        } catch (const ParseFailure& e) {
+          fail(e.column, e.message);
+        }
+        line_ = saved;
+        if (b.oword.arguments[0] != 0.0) {
+          line_ = next + 1;
+          return;
+        }
+        at = next;
+        continue;
+      }
+      line_ = next + 1;  // into the else branch, or past endif
+      return;
+    }
+  }
+
+  void loopJump(const std::string& label, bool isBreak, int column) {
+    // The loop this label belongs to: while/endwhile, do/while, repeat/endrepeat.
+    const auto& entries = labelEntries(label, column);
+    int open = -1;
+    std::string openKw;
+    for (const auto& [line, kw] : entries)
+      if (line < line_ && (kw == "while" || kw == "do" || kw == "repeat")) {
+        open = line;
+        openKw = kw;
+      }
+    if (open < 0)
+      fail(column, "expected to be inside an o" + label + " loop, found O-" +
+                       std::string(isBreak ? "break" : "continue"));
+    if (openKw == "repeat") {
+      const int close = findForward(label, line_, {"endrepeat"}, column, "O-endrepeat");
+      if (isBreak) {
+        repeats_.erase(std::make_pair(file_, open));
+        line_ = close + 1;
+      } else {
+        line_ = close;
+      }
+    } else if (openKw == "do") {
+      const int close = findForward(label, line_, {"while"}, column, "O-while");
+      line_ = isBreak ? close + 1 : close;
+    } else {
+      const int close = findForward(label, line_, {"endwhile"}, column, "O-endwhile");
+      line_ = isBreak ? close + 1 : open;
+    }
+  }
+
+  void call(const gcode::OWord& o) {
+    // Find the subroutine: this file, the main file, then <name>.ngc on the search path.
+    int targetFile = -1;
+    int targetLine = -1;
+    auto findIn = [&](int fi) {
+      const SourceFile& f = *files_[static_cast<std::size_t>(fi)];
+      const auto it = f.labels.find(o.label);
+      if (it == f.labels.end()) return false;
+      for (const auto& [line, kw] : it->second)
+        if (kw == "sub") {
+          targetFile = fi;
+          targetLine = line;
+          return true;
+        }
+      return false;
+    };
+    if (!findIn(file_) && !findIn(0)) {
+      for (int fi = 1; fi < static_cast<int>(files_.size()) && targetFile < 0; ++fi)
+        findIn(fi);
+      if (targetFile < 0 && o.label.size() > 2 && o.label.front() == '<') {
+        const std::string name = o.label.substr(1, o.label.size() - 2) + ".ngc";
+        std::vector<std::string> folders{files_[0]->folder};
+        folders.insert(folders.end(), options_.subroutinePath.begin(),
+                       options_.subroutinePath.end());
+        for (const std::string& folder : folders) {
+          const std::filesystem::path p =
+              folder.empty() ? std::filesystem::path(name) : std::filesystem::path(folder) / name;
+          std::error_code ec;
+          if (std::filesystem::is_regular_file(p, ec)) {
+            files_.push_back(makeSource(p.string(), readFile(p.string())));
+            out_.files.push_back(p.string());
+            findIn(static_cast<int>(files_.size()) - 1);
+            break;
+          }
+        }
+      }
+    }
+    if (targetFile < 0)
+      fail(o.column,
+           "expected a subroutine o" + o.label + " (in this program or as " +
+               (o.label.front() == '<' ? o.label.substr(1, o.label.size() - 2) : o.label) +
+               ".ngc beside it), found none");
+    if (frames_.size() >= 64)
+      fail(o.column, "expected subroutine calls nested at most 64 deep, found deeper recursion");
+    Frame f;
+    f.file = file_;
+    f.returnLine = line_ + 1;
+    for (std::size_t i = 0; i < 30; ++i) {
+      f.saved[i] = params_[i + 1];
+      params_[i + 1] = i < o.arguments.size() ? o.arguments[i] : 0.0;
+    }
+    frames_.push_back(std::move(f));
+    file_ = targetFile;
+    line_ = targetLine + 1;
+  }
+
+  // ---------------------------------------------------------------- one block
+  /// Slot of a word letter: A-Z, then '@' (polar radius) and '^' (polar angle).
+  static std::size_t slot(char c) {
+    return c == '@' ? 26 : c == '^' ? 27 : static_cast<std::size_t>(c - 'A');
+  }
+  struct Words {
+    std::array<std::optional<double>, 28> v;
+    std::array<int, 28> col{};
+    std::vector<std::pair<int, int>> g;  ///< (code x10, column)
+    std::vector<std::pair<int, int>> m;
+    bool has(char c) const { return v[slot(c)].has_value(); }
+    double get(char c) const { return *v[slot(c)]; }
+    int column(char c) const { return col[slot(c)]; }
+    std::optional<int> gIn(int group) const {
+      for (const auto& [code, c] : g)
+        if (gGroup(code) == group) return code;
+      return std::nullopt;
+    }
+    bool hasG(int code) const {
+      for (const auto& [x, c] : g)
+        if (x == code) return true;
+      return false;
+    }
+    bool hasM(int code) const {
+      for (const auto& [x, c] : m)
+        if (x == code) return true;
+      return false;
+    }
+    int gColumn(int code) const {
+      for (const auto& [x, c] : g)
+        if (x == code) return c;
+      return 1;
+    }
+  };
+
+  Words collect(const Block& b) {
+    Words w;
+    std::map<int, std::pair<int, int>> gGroups;  // group -> (code, column)
+    std::map<int, std::pair<int, int>> mGroups;
+    for (const gcode::Word& word : b.words) {
+      const char L = word.letter;
+      if (L == 'G' || L == 'M') {
+        const double scaled = word.value * 10.0;
+        if (std::abs(scaled - std::round(scaled)) > 1e-6 || word.value < 0.0)
+          fail(word.column, std::string("expected a ") + L + " code such as " +
+                                (L == 'G' ? "G1 or G5.2" : "M3") + ", found " + L +
+                                num(word.value));
+        const int code = codeOf(word.value);
+        const int group = L == 'G' ? gGroup(code) : (code % 10 ? -1 : mGroup(code));
+        if (group < 0) {
+          if (L == 'M' && code >= 1000 && code <= 1990)
+            fail(word.column, "expected a built-in M code, found " + codeName('M', code) +
+                                  " (user M codes M100-M199 are not interpreted)");
+          fail(word.column,
+               std::string("expected a known ") + L + " code, found " + codeName(L, code));
+        }
+        auto& groups = L == 'G' ? gGroups : mGroups;
+        const bool coolantPair = L == 'M' && group == 8 && (code == 70 || code == 80);
+        auto it = groups.find(group);
+        if (it != groups.end() &&
+            !(coolantPair && (it->second.first == 70 || it->second.first == 80)) && group != 0 &&
+            !(L == 'M' && group == 5))
+          fail(word.column, "expected at most one " + std::string(1, L) + " code of modal group " +
+                                std::to_string(group) + " per line, found " +
+                                codeName(L, it->second.first) + " and " + codeName(L, code));
+        if (L == 'G' && group == 0 && it != groups.end() && code != 530 && it->second.first != 530)
+          fail(word.column, "expected at most one non-modal G code per line, found " +
+                                codeName('G', it->second.first) + " and " + codeName('G', code));
+        groups[group] = {code, word.column};
+        (L == 'G' ? w.g : w.m).emplace_back(code, word.column);
+        continue;
+      }
+      const std::size_t i = slot(L);
+      if (w.v[i])
+        fail(word.column, std::string("expected one ") + L + " word per line, found a second " + L);
+      w.v[i] = word.value;
+      w.col[i] = word.column;
+    }
+    for (const char axis : {'A', 'B', 'C', 'U', 'V', 'W'})
+      if (w.has(axis))
+        fail(
+            w.column(axis),
+            std::string("expected X, Y or Z axis words (engage simulates 3-axis milling), found ") +
+                axis);
+    return w;
+  }
+
+  /// Executes a block in LinuxCNC's order; true when the program ends.
+  bool executeBlock(const Block& b) {
+    if (b.words.empty()) return false;
+    Words w = collect(b);
+
+    // Unsupported codes first, with a clear word.
+    for (const auto& [code, column] : w.g) {
+      switch (code) {
+        case 410:
+        case 411:
+        case 420:
+        case 421:
+          fail(column, "expected G40 (cutter compensation off), found " + codeName('G', code) +
+                           ": cutter radius compensation is not interpreted; post the program with "
+                           "compensation computed by the CAM system");
+        case 330:
+        case 331:
+        case 760:
+          fail(column, "expected a milling motion, found " + codeName('G', code) +
+                           " (spindle-synchronised threading is not interpreted)");
+        case 382:
+        case 383:
+        case 384:
+        case 385:
+          fail(column, "expected a milling motion, found " + codeName('G', code) +
+                           " (probing needs a machine)");
+        case 860:
+        case 870:
+        case 880:
+          fail(column, "expected one of the canned cycles G73 G81 G82 G83 G85 G89, found " +
+                           codeName('G', code));
+        case 70:
+        case 80:
+          fail(column, "expected a milling program, found " + codeName('G', code) +
+                           " (lathe diameter mode)");
+        case 432:
+        case 520:
+        case 171:
+        case 181:
+        case 191:
+          fail(column, "expected a supported G code, found " + codeName('G', code));
+        default:
+          break;
+      }
+    }
+
+    // Feed mode, F, S, T, M6/M61, spindle.
+    if (const auto g = w.gIn(5))
+      feedMode_ = *g == 930   ? FeedMode::InverseTime
+                  : *g == 950 ? FeedMode::UnitsPerRevolution
+                              : FeedMode::UnitsPerMinute;
+    if (w.has('F')) {
+      if (w.get('F') < 0.0)
+        fail(w.column('F'), "expected a non-negative F word, found F" + num(w.get('F')));
+      feed_ = feedMode_ == FeedMode::InverseTime ? w.get('F') : w.get('F') * unit();
+    }
+    if (w.has('S')) {
+      if (w.get('S') < 0.0)
+        fail(w.column('S'), "expected a non-negative S word, found S" + num(w.get('S')));
+      spindleSpeed_ = w.get('S');
+    }
+    if (w.has('T')) {
+      if (w.get('T') < 0.0)
+        fail(w.column('T'), "expected a tool number, found T" + num(w.get('T')));
+      preparedTool_ = static_cast<int>(std::lround(w.get('T')));
+    }
+    if (w.hasM(60)) tool_ = preparedTool_;
+    if (w.hasM(610)) {
+      if (!w.has('Q')) fail(1, "expected a Q word (tool number) with M61, found none");
+      tool_ = static_cast<int>(std::lround(w.get('Q')));
+    }
+    if (w.hasM(30)) spindleDirection_ = 1;
+    if (w.hasM(40)) spindleDirection_ = -1;
+    if (w.hasM(50)) spindleDirection_ = 0;
+    if (w.hasM(700)) saveModal();
+    if (w.hasM(720)) restoreModal();
+
+    // Dwell, plane, units, compensation, tool length, coordinate system, modes.
+    if (w.hasG(40) && !w.has('P'))
+      fail(w.gColumn(40), "expected a P word (seconds) with G4, found none");
+    if (const auto g = w.gIn(2)) plane_ = *g == 170 ? Plane::XY : *g == 180 ? Plane::XZ : Plane::YZ;
+    if (const auto g = w.gIn(6)) {
+      const bool inch = *g == 200;
+      if (inch != inch_) {
+        convertStoredLengths(inch ? 1.0 / kInch : kInch);
+        inch_ = inch;
+      }
+    }
+    if (const auto g = w.gIn(8)) {
+      // The spindle stays where it is: a longer tool puts the tip lower.
+      const double previousLength = toolLength_;
+      if (*g == 430) {
+        const int h = w.has('H') ? static_cast<int>(std::lround(w.get('H'))) : tool_;
+        const auto it = toolLengths_.find(h);
+        toolLength_ = it == toolLengths_.end() ? 0.0 : it->second;  // mm
+      } else if (*g == 431) {
+        toolLength_ = w.has('Z') ? w.get('Z') * unit() : 0.0;
+      } else {
+        toolLength_ = 0.0;
+      }
+      params_[5403] = toolLength_ / unit();
+      // LinuxCNC re-reads the position after a tool change (M6) on the same line, so the
+      // shift applies only without one.
+      if (!w.hasM(60)) pos_.z() -= toolLength_ - previousLength;
+    }
+    if (const auto g = w.gIn(12)) {
+      static const std::map<int, int> systems{{540, 1}, {550, 2}, {560, 3}, {570, 4}, {580, 5},
+                                              {590, 6}, {591, 7}, {592, 8}, {593, 9}};
+      params_[5220] = systems.at(*g);
+    }
+    if (const auto g = w.gIn(3)) incremental_ = *g == 910;
+    if (const auto g = w.gIn(4)) arcIncremental_ = *g == 911;
+    if (const auto g = w.gIn(10)) retractToR_ = *g == 990;
+
+    // Non-modal group 0 (other than G4 and G53) consumes the axis words.
+    const std::optional<int> g0 = [&]() -> std::optional<int> {
+      for (const auto& [code, c] : w.g)
+        if (gGroup(code) == 0 && code != 40 && code != 530) return code;
+      return std::nullopt;
+    }();
+    const bool axes = w.has('X') || w.has('Y') || w.has('Z') || w.has('@') || w.has('^');
+    const std::optional<int> motionWord = w.gIn(1);
+    if (g0 && motionWord && axes && (*g0 == 100 || *g0 == 280 || *g0 == 300 || *g0 == 920))
+      fail(w.gColumn(*g0), "expected either " + codeName('G', *g0) +
+                               " or a motion on this line, found both using the axis words");
+    if (g0) nonModal(*g0, w);
+
+    // Motion.
+    motionBefore_ = motion_;
+    if (motionWord) motion_ = *motionWord;
+    const bool machineCoords = w.hasG(530);
+    if (machineCoords && !(motion_ == 0 || motion_ == 10))
+      fail(w.gColumn(530),
+           "expected G0 or G1 with G53, found " + codeName('G', motion_) + " active");
+    const bool axesForMotion =
+        axes && !w.hasG(431) && !(g0 && (*g0 == 100 || *g0 == 280 || *g0 == 300 || *g0 == 920));
+    const bool cycleMode = motion_ == 730 || (motion_ >= 810 && motion_ <= 890);
+    if (!cycleMode) cycleInitialValid_ = false;
+    if (motionWord && *motionWord == 800) {
+      if (axesForMotion) fail(w.gColumn(800), "expected no axis words with G80, found some");
+      cycleActive_ = false;
+    } else if (axesForMotion ||
+               (motionWord && (*motionWord == 20 || *motionWord == 30 || *motionWord == 53))) {
+      if (motion_ < 0 || motion_ == 800)
+        fail(w.column(w.has('X')   ? 'X'
+                      : w.has('Y') ? 'Y'
+                                   : 'Z'),
+             "expected a motion mode (G0, G1, G2, G3, ...) for these axis words, found G80 (none) "
+             "active");
+      motion(w, motionWord.has_value(), machineCoords);
+    } else if (motionWord && *motionWord == 52 && (w.has('P') || w.has('L'))) {
+      motion(w, true, false);  // G5.2 opening a NURBS block without axis words
+    }
+
+    // Stop codes.
+    for (const auto& [code, c] : w.m)
+      if (code == 20 || code == 300) return true;
+    return false;
+  }
+
+  void saveModal() {
+    saved_ = Modal{plane_,      inch_, incremental_,  arcIncremental_, feedMode_,
+                   retractToR_, feed_, spindleSpeed_, motion_};
+  }
+  void restoreModal() {
+    if (!saved_) return;
+    const Modal& s = *saved_;
+    if (s.inch != inch_) {
+      convertStoredLengths(s.inch ? 1.0 / kInch : kInch);
+    }
+    plane_ = s.plane;
+    inch_ = s.inch;
+    incremental_ = s.incremental;
+    arcIncremental_ = s.arcIncremental;
+    feedMode_ = s.feedMode;
+    retractToR_ = s.retractToR;
+    feed_ = s.feed;
+    spindleSpeed_ = s.spindle;
+    motion_ = s.motion;
+  }
+
+  void nonModal(int code, const Words& w) {
+    const int column = w.gColumn(code);
+    switch (code) {
+      case 100: {  // G10
+        if (!w.has('L')) fail(column, "expected an L word with G10, found none");
+        const int L = static_cast<int>(std::lround(w.get('L')));
+        if (L == 1 || L == 10 || L == 11) return;  // tool table edits: no effect on the path
+        if (L != 2 && L != 20)
+          fail(w.column('L'), "expected G10 L1, L2, L10, L11 or L20, found L" + std::to_string(L));
+        if (w.has('R') && w.get('R') != 0.0)
+          fail(w.column('R'), "expected no XY rotation (R) in G10 L2, found R" + num(w.get('R')));
+        int p = w.has('P') ? static_cast<int>(std::lround(w.get('P'))) : 0;
+        if (p == 0) p = static_cast<int>(params_[5220]);
+        if (p < 1 || p > 9)
+          fail(w.column('P'),
+               "expected a coordinate system P1..P9 (or P0 for the active one), found P" +
+                   std::to_string(p));
+        const std::size_t base = static_cast<std::size_t>(5221 + 20 * (p - 1));
+        for (int a = 0; a < 3; ++a) {
+          const char letter = static_cast<char>('X' + a);
+          if (!w.has(letter)) continue;
+          if (L == 2) {
+            params_[base + static_cast<std::size_t>(a)] = w.get(letter);
+          } else {
+            // L20: the current position becomes the given value in system p.
+            double g92 = params_[5210] != 0.0 ? params_[5211 + static_cast<std::size_t>(a)] : 0.0;
+            params_[base + static_cast<std::size_t>(a)] = pos_[a] / unit() - g92 - w.get(letter);
+          }
+        }
+        return;
+      }
+      case 280:
+      case 300: {  // G28 / G30: through the optional intermediate point to home
+        const std::size_t home = code == 280 ? 5161 : 5181;
+        const bool any = w.has('X') || w.has('Y') || w.has('Z');
+        if (any) {
+          const Vector3d intermediate = target(w, false);
+          emitLinear(MoveKind::Rapid, intermediate);
+        }
+        Vector3d end = pos_;
+        for (int a = 0; a < 3; ++a)
+          if (!any || w.has(static_cast<char>('X' + a)))
+            end[a] =
+                params_[home + static_cast<std::size_t>(a)] * unit() - (a == 2 ? toolLength_ : 0.0);
+        emitLinear(MoveKind::Rapid, end);
+        return;
+      }
+      case 281:
+      case 301: {  // store the current machine position as home
+        const std::size_t home = code == 281 ? 5161 : 5181;
+        for (int a = 0; a < 3; ++a)
+          params_[home + static_cast<std::size_t>(a)] =
+              (pos_[a] + (a == 2 ? toolLength_ : 0.0)) / unit();
+        return;
+      }
+      case 920: {  // G92: offsets so that the current point takes the given values
+        if (!(w.has('X') || w.has('Y') || w.has('Z')))
+          fail(column, "expected axis words with G92, found none");
+        const int cs = static_cast<int>(params_[5220]);
+        const std::size_t base = static_cast<std::size_t>(5221 + 20 * (cs - 1));
+        for (int a = 0; a < 3; ++a) {
+          const char letter = static_cast<char>('X' + a);
+          if (params_[5210] == 0.0) params_[5211 + static_cast<std::size_t>(a)] = 0.0;
+          if (w.has(letter))
+            params_[5211 + static_cast<std::size_t>(a)] =
+                pos_[a] / unit() - params_[base + static_cast<std::size_t>(a)] - w.get(letter);
+        }
+        params_[5210] = 1.0;
+        return;
+      }
+      case 921:  // G92.1: cancel and zero
+        params_[5210] = 0.0;
+        params_[5211] = params_[5212] = params_[5213] = 0.0;
+        return;
+      case 922:
+        params_[5210] = 0.0;
+        return;  // G92.2: suspend, keep values
+      case 923:
+        params_[5210] = 1.0;
+        return;  // G92.3: restore
+      default:
+        return;
+    }
+  }
+
+  // ---------------------------------------------------------------- motion
+  /// Target of the axis words in machine coordinates (mm).
+  Vector3d target(const Words& w, bool machineCoords) const {
+    Vector3d end = pos_;
+    const Vector3d program = programPosition();
+    const Vector3d offset = workOffset();
+    for (int a = 0; a < 3; ++a) {
+      const char letter = static_cast<char>('X' + a);
+      if (!w.has(letter)) continue;
+      const double v = w.get(letter);
+      if (machineCoords)
+        // G53 positions the spindle's gauge line; the tip is one tool length below it.
+        end[a] = v * unit() - (a == 2 ? toolLength_ : 0.0);
+      else if (incremental_)
+        end[a] = (program[a] + v) * unit() + offset[a];
+      else
+        end[a] = v * unit() + offset[a];
+    }
+    if (w.has('@') || w.has('^')) {
+      const Eigen::Vector2d xy = polarTarget(w, Eigen::Vector2d(program.x(), program.y()));
+      end.x() = xy.x() * unit() + offset.x();
+      end.y() = xy.y() * unit() + offset.y();
+    }
+    return end;
+  }
+
+  /// LinuxCNC polar words in the XY plane, program units: @ radius and ^ angle (degrees)
+  /// about the program origin; absolute in G90, added to the current radius and angle in G91.
+  Eigen::Vector2d polarTarget(const Words& w, const Eigen::Vector2d& current) const {
+    const char* clash = w.has('X') ? "X" : w.has('Y') ? "Y" : nullptr;
+    if (clash)
+      fail(w.column(clash[0]),
+           std::string("expected either polar (@, ^) or cartesian words, found both @/^ and ") +
+               clash);
+    if (plane_ != Plane::XY)
+      fail(w.column(w.has('@') ? '@' : '^'),
+           "expected the XY plane (G17) for polar words, found " + std::string(planeName(plane_)));
+    const double r0 = current.norm();
+    const double a0 = std::atan2(current.y(), current.x());
+    const double at = w.has('@') ? w.get('@') : 0.0;
+    const double angle = w.has('^') ? w.get('^') * kHalfPi / 90.0 : 0.0;
+    const double r = incremental_ ? r0 + at : (w.has('@') ? at : r0);
+    const double a = incremental_ ? a0 + angle : (w.has('^') ? angle : a0);
+    return Eigen::Vector2d(r * std::cos(a), r * std::sin(a));
+  }
+
+  Move base(MoveKind kind) const {
+    Move m;
+    m.kind = kind;
+    m.start = pos_;
+    m.plane = plane_;
+    m.spindleRpm = spindleDirection_ * spindleSpeed_;
+    m.tool = tool_;
+    m.file = fileIndexInOutput();
+    m.line = line_ + 1;
+    return m;
+  }
+  int fileIndexInOutput() const {
+    const std::string& name = files_[static_cast<std::size_t>(file_)]->name;
+    for (std::size_t i = 0; i < out_.files.size(); ++i)
+      if (out_.files[i] == name) return static_cast<int>(i);
+    return 0;
+  }
+
+  /// Feed of a move of `length` mm under the active feed mode, mm/min.
+  double feedFor(double length, const Words& w, int column) {
+    switch (feedMode_) {
+      case FeedMode::InverseTime:
+        if (!w.has('F'))
+          fail(column,
+               "expected an F word on every feed move in inverse-time mode (G93), found none");
+        if (feed_ <= 0.0) fail(w.column('F'), "expected a positive inverse-time F word, found F0");
+        return length * feed_;
+      case FeedMode::UnitsPerRevolution:
+        if (spindleSpeed_ <= 0.0)
+          fail(column, "expected a spindle speed S for feed per revolution (G95), found S0");
+        if (feed_ <= 0.0)
+          fail(column, "expected a positive F word before the first feed move, found F0");
+        return feed_ * spindleSpeed_;
+      case FeedMode::UnitsPerMinute:
+        break;
+    }
+    if (feed_ <= 0.0)
+      fail(column, "expected a positive F word before the first feed move, found feed 0");
+    return feed_;
+  }
+
+  void emitLinear(MoveKind kind, const Vector3d& end, double feed = 0.0) {
+    Move m = base(kind);
+    m.end = end;
+    m.feed = kind == MoveKind::Rapid ? 0.0 : feed;
+    pos_ = end;
+    out_.moves.push_back(std::move(m));
+  }
+
+  void motion(const Words& w, bool explicitMotion, bool machineCoords) {
+    const int column = explicitMotion ? w.gColumn(motion_) : 1;
+    switch (motion_) {
+      case 0:
+        emitLinear(MoveKind::Rapid, target(w, machineCoords));
+        return;
+      case 10: {
+        const Vector3d end = target(w, machineCoords);
+        emitLinear(MoveKind::Line, end, feedFor((end - pos_).norm(), w, column));
+        return;
+      }
+      case 20:
+      case 30:
+        arc(w, column);
+        return;
+      case 50:
+      case 51:
+        spline(w, column);
+        return;
+      case 52:
+        nurbsPoint(w, column);
+        return;
+      case 53:
+        nurbsEnd(w, column);
+        return;
+      case 730:
+      case 810:
+      case 820:
+      case 830:
+      case 850:
+      case 890:
+        cycle(w, column, explicitMotion);
+        return;
+      default:
+        fail(column, "expected a supported motion, found " + codeName('G', motion_));
+    }
+  }
+
+  /// In-plane axes (a, b) and normal n of the active plane, as in Toolpath.cpp; and the
+  /// letters of the centre offsets for a and b.
+  struct PlaneAxes {
+    int a, b, n;
+    char ia, ib;
+  };
+  PlaneAxes planeAxes() const {
+    switch (plane_) {
+      case Plane::XY:
+        return {0, 1, 2, 'I', 'J'};
+      case Plane::XZ:
+        return {2, 0, 1, 'K', 'I'};
+      case Plane::YZ:
+        return {1, 2, 0, 'J', 'K'};
+    }
+    return {0, 1, 2, 'I', 'J'};
+  }
+
+  void arc(const Words& w, int column) {
+    const PlaneAxes ax = planeAxes();
+    const Vector3d end = target(w, false);
+    const bool ccw = motion_ == 30;
+    const double tol = (inch_ ? kArcToleranceInch : kArcToleranceMm) * unit();
+    Move m = base(MoveKind::Arc);
+    m.end = end;
+    int turns = 1;
+    if (w.has('P')) {
+      const double p = w.get('P');
+      if (p < 1.0 || std::abs(p - std::round(p)) > 1e-9)
+        fail(w.column('P'), "expected a whole number of turns P >= 1, found P" + num(p));
+      turns = static_cast<int>(std::lround(p));
+    }
+    m.turns = ccw ? turns : -turns;
+    const double sa = pos_[ax.a], sb = pos_[ax.b], ea = end[ax.a], eb = end[ax.b];
+    double ca = 0.0, cb = 0.0;
+    if (w.has('R')) {
+      if (w.has(ax.ia) || w.has(ax.ib))
+        fail(w.column('R'), std::string("expected either R or ") + ax.ia + "/" + ax.ib +
+                                " for an arc, found both");
+      const double radius = w.get('R') * unit();
+      if (std::abs(ea - sa) < 1e-12 && std::abs(eb - sb) < 1e-12)
+        fail(w.column('R'),
+             "expected an R-form arc to end elsewhere than it starts (use I/J for a full circle), "
+             "found the same point");
+      const double ma = (sa + ea) / 2.0, mb = (sb + eb) / 2.0;
+      double half = std::hypot(ea - ma, eb - mb);
+      const double r = std::abs(radius);
+      if (half - r > tol)
+        fail(w.column('R'), "expected an arc radius that reaches the end point (at least " +
+                                num(half / unit()) + "), found R" + num(w.get('R')));
+      if (half / r > 1.0 - 1e-12) half = r;
+      const double chordAngle = std::atan2(eb - sb, ea - sa);
+      const double theta = ((!ccw && radius > 0.0) || (ccw && radius < 0.0)) ? chordAngle - kHalfPi
+                                                                             : chordAngle + kHalfPi;
+      const double offset = r * std::cos(std::asin(half / r));
+      ca = ma + offset * std::cos(theta);
+      cb = mb + offset * std::sin(theta);
+    } else {
+      if (!w.has(ax.ia) && !w.has(ax.ib))
+        fail(column, std::string("expected ") + ax.ia + "/" + ax.ib +
+                         " centre words or R for an arc in the " + planeName(plane_) +
+                         " plane, found neither");
+      const Vector3d offset = workOffset();
+      const double ia = w.has(ax.ia) ? w.get(ax.ia) * unit() : 0.0;
+      const double ib = w.has(ax.ib) ? w.get(ax.ib) * unit() : 0.0;
+      if (arcIncremental_) {
+        ca = sa + ia;
+        cb = sb + ib;
+      } else {
+        ca = ia + offset[ax.a];
+        cb = ib + offset[ax.b];
+      }
+      const double r1 = std::hypot(sa - ca, sb - cb);
+      const double r2 = std::hypot(ea - ca, eb - cb);
+      if (r1 < 0.1 * tol || r2 < 0.1 * tol)
+        fail(column, "expected an arc of non-zero radius, found radius 0");
+      if (std::abs(r1 - r2) > tol)
+        fail(column, "expected the arc's end on its circle (radius to start " + num(r1 / unit()) +
+                         ", to end " + num(r2 / unit()) + "), found them " +
+                         num(std::abs(r1 - r2) / unit()) + " apart, more than " +
+                         num(tol / unit()));
+    }
+    m.center = pos_;
+    m.center[ax.a] = ca;
+    m.center[ax.b] = cb;
+    pos_ = end;
+    m.feed = feedFor(moveLength(m), w, column);
+    out_.moves.push_back(std::move(m));
+  }
+
+  void spline(const Words& w, int column) {
+    if (plane_ != Plane::XY)
+      fail(column, "expected the XY plane (G17) for G5/G5.1 splines, found " +
+                       std::string(planeName(plane_)));
+    if (w.has('Z'))
+      fail(w.column('Z'), "expected no Z word on a G5/G5.1 spline (they are planar), found Z");
+    const Vector3d end = target(w, false);
+    const Eigen::Vector2d p0(pos_.x(), pos_.y());
+    const Eigen::Vector2d p3(end.x(), end.y());
+    std::vector<Eigen::Vector2d> pts;
+    if (motion_ == 50) {
+      Eigen::Vector2d i;
+      if (w.has('I') || w.has('J')) {
+        if (!(w.has('I') && w.has('J')))
+          fail(column, "expected both I and J (or neither after another G5) on G5, found one");
+        i = Eigen::Vector2d(w.get('I'), w.get('J')) * unit();
+      } else {
+        if (!lastCubic_) fail(column, "expected I and J on the first G5 of a curve, found neither");
+        i = -*lastCubic_;
+      }
+      if (!(w.has('P') && w.has('Q')))
+        fail(column, "expected P and Q on G5, found " + std::string(w.has('P') ? "no Q" : "no P"));
+      const Eigen::Vector2d pq(w.get('P') * unit(), w.get('Q') * unit());
+      pts = gcode::flattenCubic(p0, p0 + i, p3 + pq, p3, kSplineTolerance);
+      lastCubic_ = pq;
+    } else {
+      if (!w.has('I') && !w.has('J')) fail(column, "expected I and/or J on G5.1, found neither");
+      const Eigen::Vector2d i(w.has('I') ? w.get('I') * unit() : 0.0,
+                              w.has('J') ? w.get('J') * unit() : 0.0);
+      pts = gcode::flattenQuadratic(p0, p0 + i, p3, kSplineTolerance);
+    }
+    emitSpline(pts, w, column);
+  }
+
+  void emitSpline(const std::vector<Eigen::Vector2d>& pts, const Words& w, int column) {
+    Move m = base(MoveKind::Spline);
+    for (const Eigen::Vector2d& p : pts)
+      m.points.emplace_back(p.x(), p.y(), pos_.z());
+    m.end = m.points.back();
+    pos_ = m.end;
+    m.feed = feedFor(moveLength(m), w, column);
+    out_.moves.push_back(std::move(m));
+  }
+
+  void nurbsPoint(const Words& w, int column) {
+    if (plane_ != Plane::XY)
+      fail(column,
+           "expected the XY plane (G17) for G5.2 NURBS, found " + std::string(planeName(plane_)));
+    if (nurbs_.empty()) {
+      nurbsOrder_ = w.has('L') ? static_cast<int>(std::lround(w.get('L'))) : 3;
+      if (nurbsOrder_ < 2)
+        fail(w.column('L'), "expected a NURBS order L >= 2, found L" + std::to_string(nurbsOrder_));
+      nurbs_.push_back({Eigen::Vector2d(pos_.x(), pos_.y()), 1.0});
+      nurbsLine_ = line_;
+    }
+    const Vector3d p = target(w, false);
+    const double weight = w.has('P') ? w.get('P') : 1.0;
+    if (weight <= 0.0)
+      fail(w.column('P'), "expected a positive NURBS weight P, found P" + num(weight));
+    if (w.has('X') || w.has('Y')) nurbs_.push_back({Eigen::Vector2d(p.x(), p.y()), weight});
+  }
+
+  void nurbsEnd(const Words& w, int column) {
+    if (nurbs_.size() < 2) fail(column, "expected G5.2 control points before G5.3, found none");
+    if (static_cast<int>(nurbs_.size()) < nurbsOrder_)
+      fail(column, "expected at least L = " + std::to_string(nurbsOrder_) +
+                       " NURBS control points, found " + std::to_string(nurbs_.size()));
+    std::vector<Eigen::Vector2d> cp;
+    std::vector<double> weights;
+    for (const auto& [p, wt] : nurbs_) {
+      cp.push_back(p);
+      weights.push_back(wt);
+    }
+    const auto pts = gcode::flattenNurbs(cp, weights, nurbsOrder_, kSplineTolerance);
+    const int saved = line_;
+    line_ = nurbsLine_;
+    emitSpline(pts, w, column);
+    line_ = saved;
+    nurbs_.clear();
+    motion_ = 800;  // G5.3 ends the NURBS block; LinuxCNC then needs a new motion word
+  }
+
+  // ---------------------------------------------------------------- canned cycles (G17)
+  void cycle(const Words& w, int column, bool explicitMotion) {
+    if (plane_ != Plane::XY)
+      fail(column, "expected the XY plane (G17) for canned cycles, found " +
+                       std::string(planeName(plane_)));
+    const bool newCycle = explicitMotion && (!cycleActive_ || motionBefore_ != motion_);
+    if (newCycle) {
+      if (!w.has('R'))
+        fail(column, "expected an R word (retract plane) when a canned cycle starts, found none");
+      if (!w.has('Z'))
+        fail(column, "expected a Z word (hole bottom) when a canned cycle starts, found none");
+    }
+    if (newCycle && (motion_ == 820 || motion_ == 890) && !w.has('P'))
+      fail(column, "expected a P word (dwell seconds) when " + codeName('G', motion_) +
+                       " starts, found none");
+    cycleActive_ = true;
+    const Vector3d offset = workOffset();
+    // The initial level is the Z where this run of canned-cycle blocks began (LinuxCNC's
+    // cycle_il): G98 returns there, and G91 measures R from it.
+    if (!cycleInitialValid_) {
+      cycleInitial_ = pos_.z();
+      cycleInitialValid_ = true;
+    }
+    double oldZ = cycleInitial_;  // machine mm
+    // R and Z: absolute in program coordinates (G90), or R from the current Z and Z from R (G91).
+    if (w.has('R')) cycleR_ = w.get('R');
+    if (w.has('Z')) cycleZ_ = w.get('Z');
+    if (w.has('Q')) cycleQ_ = w.get('Q');
+    if (w.has('P')) cycleP_ = w.get('P');
+    double r, bottom;
+    if (incremental_) {
+      r = oldZ + cycleR_ * unit();
+      bottom = r + cycleZ_ * unit();
+    } else {
+      r = cycleR_ * unit() + offset.z();
+      bottom = cycleZ_ * unit() + offset.z();
+    }
+    if (bottom > r)
+      fail(w.has('Z') ? w.column('Z') : column,
+           "expected the hole bottom Z below the retract plane R, found it above");
+    if ((motion_ == 830 || motion_ == 730) && !(cycleQ_ > 0.0))
+      fail(column, "expected a positive peck depth Q for " + codeName('G', motion_) + ", found Q" +
+                       num(cycleQ_));
+    int repeats = 1;
+    if (w.has('L')) {
+      repeats = static_cast<int>(std::lround(w.get('L')));
+      if (repeats < 0)
+        fail(w.column('L'), "expected a repeat count L >= 0, found L" + num(w.get('L')));
+    }
+    if (oldZ < r) {
+      emitLinear(MoveKind::Rapid, Vector3d(pos_.x(), pos_.y(), r));
+      oldZ = r;
+    }
+    const double clear = retractToR_ ? r : oldZ;
+    double x = pos_.x(), y = pos_.y();
+    const Vector3d program = programPosition();
+    for (int i = 0; i < repeats; ++i) {
+      if (w.has('@') || w.has('^')) {
+        const Eigen::Vector2d xy =
+            polarTarget(w, Eigen::Vector2d((x - offset.x()) / unit(), (y - offset.y()) / unit()));
+        x = xy.x() * unit() + offset.x();
+        y = xy.y() * unit() + offset.y();
+      } else if (incremental_) {
+        x += w.has('X') ? w.get('X') * unit() : 0.0;
+        y += w.has('Y') ? w.get('Y') * unit() : 0.0;
+      } else {
+        x = (w.has('X') ? w.get('X') : program.x()) * unit() + offset.x();
+        y = (w.has('Y') ? w.get('Y') : program.y()) * unit() + offset.y();
+      }
+      emitLinear(MoveKind::Rapid, Vector3d(x, y, oldZ));
+      emitLinear(MoveKind::Rapid, Vector3d(x, y, r));
+      const double f = [&] { return feedFor(1.0, w, column); }();
+      auto feedTo = [&](double z) {
+        emitLinear(
+            MoveKind::Line, Vector3d(x, y, z),
+            feedMode_ == FeedMode::InverseTime ? feedFor(std::abs(z - pos_.z()), w, column) : f);
+      };
+      auto rapidTo = [&](double z) { emitLinear(MoveKind::Rapid, Vector3d(x, y, z)); };
+      const double delta = kPeckClearanceInch * kInch;
+      switch (motion_) {
+        case 810:
+        case 820:
+          feedTo(bottom);
+          rapidTo(clear);
+          break;
+        case 830:
+        case 730: {
+          const double q = cycleQ_ * unit();
+          for (double depth = r - q; depth > bottom; depth -= q) {
+            feedTo(depth);
+            if (motion_ == 830) {
+              rapidTo(r);
+              rapidTo(depth + delta);
+            } else {
+              rapidTo(depth + delta);
+            }
+          }
+          feedTo(bottom);
+          rapidTo(clear);
+          break;
+        }
+        case 850:
+        case 890:
+          feedTo(bottom);
+          feedTo(r);
+          if (clear > r) rapidTo(clear);
+          break;
+        default:
+          break;
+      }
+      oldZ = clear;
+    }
+  }
+
+  struct Modal {
+    Plane plane;
+    bool inch;
+    bool incremental;
+    bool arcIncremental;
+    FeedMode feedMode;
+    bool retractToR;
+    double feed;
+    double spindle;
+    int motion;
+  };
+
+  const ReaderOptions& options_;
+  Toolpath out_;
+  std::vector<std::unique_ptr<SourceFile>> files_;
+  int file_ = 0;
+  int line_ = 0;
+  std::vector<Frame> frames_;
+  std::map<std::pair<int, int>, long> repeats_;
+  std::vector<double> params_;
+  std::unordered_map<std::string, double> globals_;
+  std::unordered_map<std::string, double> topLocals_;
+  std::map<int, double> toolLengths_;  ///< mm
+  std::optional<Modal> saved_;
+
+  Vector3d pos_{0.0, 0.0, 0.0};
+  Plane plane_ = Plane::XY;
+  bool inch_ = false;
+  bool incremental_ = false;
+  bool arcIncremental_ = true;
+  FeedMode feedMode_ = FeedMode::UnitsPerMinute;
+  bool retractToR_ = false;
+  double feed_ = 0.0;  ///< mm/min (G94), mm/rev (G95) or 1/min (G93)
+  double spindleSpeed_ = 0.0;
+  int spindleDirection_ = 0;
+  int tool_ = 0;
+  int preparedTool_ = 0;
+  double toolLength_ = 0.0;
+  int motion_ = 800;        ///< G80: axis words need a motion word first, as in LinuxCNC
+  int motionBefore_ = 800;  ///< motion mode before the current block
+  bool cycleActive_ = false;
+  bool cycleInitialValid_ = false;
+  double cycleInitial_ = 0.0;  ///< mm, machine Z where the current run of cycles began
+  double cycleR_ = 0.0, cycleZ_ = 0.0, cycleQ_ = 0.0, cycleP_ = 0.0;
+  std::optional<Eigen::Vector2d> lastCubic_;
+  std::vector<std::pair<Eigen::Vector2d, double>> nurbs_;
+  int nurbsOrder_ = 3;
+  int nurbsLine_ = 0;
+};
+
+}  // namespace
+
+Toolpath readProgram(const std::string& path, const ReaderOptions& options) {
+  return readProgramText(readFile(path), path, options);
+}
+
+Toolpath readProgramText(const std::string& text, const std::string& name,
+                         const ReaderOptions& options) {
+  Interpreter interpreter(options);
+  return interpreter.run(makeSource(name, text));
+}
+
+}  // namespace engage

@@ -1,0 +1,50 @@
+#pragma once
+/// \file GcodeReader.h
+/// Interprets RS274/NGC milling programs as LinuxCNC does, into a Toolpath (mm, machine
+/// coordinates after work offsets, see Toolpath.h).
+///
+/// Supported: G0 G1 G2 G3 (IJK centre, R form with negative R, full circles, helices, P turns,
+/// all three planes), G4, G5 G5.1 G5.2/G5.3 (cubic, quadratic and NURBS splines, flattened to
+/// 0.001 mm), G10 L1/L2/L10/L11/L20, G17 G18 G19, G20 G21, G28 G28.1 G30 G30.1, G40, G43 G43.1
+/// G49, G53, G54-G59.3, G61 G61.1 G64, G73 G80 G81 G82 G83 G85 G89 with G98 G99 (XY plane),
+/// G90 G91 G90.1 G91.1, G92 G92.1 G92.2 G92.3, G93 G94 G95, G96 G97, F S T M0 M1 M2 M3 M4 M5
+/// M6 M7 M8 M9 M30 M48-M53 M60 M61 M62-M68 M70-M73, N, comments, %, block delete, parameters,
+/// expressions, and O-word subroutines (in the program or in <name>.ngc beside it), loops
+/// and conditionals.
+///
+/// Not supported, each a GcodeError naming the word: cutter compensation G41/G42, rotary and
+/// UVW axes, probing G38, threading G33/G76, lathe modes, boring cycles G86-G88, canned cycles
+/// outside G17, user M codes M100-M199.
+
+#include "engine/gcode/Toolpath.h"
+
+#include <string>
+#include <vector>
+
+namespace engage {
+
+/// How to read a program.
+struct ReaderOptions {
+  /// LinuxCNC tool table (T P Z D ... lines); empty: every tool has zero length.
+  std::string toolTable;
+  /// The tool table's lengths are in inches (LinuxCNC's stand-alone rs274 default) rather
+  /// than mm.
+  bool toolTableInch = false;
+  /// Skip lines that start with '/' (the block delete switch); off as in LinuxCNC's default.
+  bool blockDelete = false;
+  /// Folders searched for o<name> call subroutine files (<name>.ngc); the program's own
+  /// folder is always searched first.
+  std::vector<std::string> subroutinePath;
+  /// Safety limit on executed lines (loops that never end): a GcodeError beyond it.
+  long long maxExecutedLines = 50'000'000;
+};
+
+/// Read and interpret a program file. Throws GcodeError ("file:line:col: expected ..., found
+/// ...") for anything it cannot interpret, Error when the file cannot be read.
+Toolpath readProgram(const std::string& path, const ReaderOptions& options = {});
+
+/// Interpret program text; `name` is used in messages and as Toolpath::files[0].
+Toolpath readProgramText(const std::string& text, const std::string& name,
+                         const ReaderOptions& options = {});
+
+}  // namespace engage

@@ -1,0 +1,78 @@
+#pragma once
+/// \file LineParser.h
+/// Reads one line of RS274/NGC (LinuxCNC dialect) into a Block, evaluating expressions and
+/// parameter references against the values they have before the line (assignments on the
+/// line take effect after it, as in LinuxCNC).
+///
+/// Syntax: letters are case-insensitive; spaces and tabs are ignored outside comments;
+/// `( )` comments, `;` comments to the end of the line; `/` block delete at the start;
+/// numbers without exponents; `[expr]` with ** * / MOD + - EQ NE GT GE LT LE AND OR XOR,
+/// functions ABS ACOS ASIN ATAN[a]/[b] COS EXP FIX FUP ROUND LN SIN SQRT TAN EXISTS (angles in
+/// degrees); parameters #n, #[expr], #<name>; assignments #n=value, #<name>=value; O-words.
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace engage::gcode {
+
+/// Where a line parser reads and checks parameters.
+class ParameterSource {
+ public:
+  virtual ~ParameterSource() = default;
+  /// Value of numbered parameter n; throws std::out_of_range message text for a bad n.
+  virtual double numbered(int n) const = 0;
+  /// Value of a named parameter (name lower-cased, spaces removed); false when unset.
+  virtual bool named(const std::string& name, double& value) const = 0;
+};
+
+/// One word such as G1 or X10.5: letter upper-cased ('@' and '^' for LinuxCNC's polar
+/// radius and angle), value evaluated; 1-based column.
+struct Word {
+  char letter = 0;
+  double value = 0.0;
+  int column = 0;
+};
+
+/// #n = v or #<name> = v.
+struct Assignment {
+  int number = 0;    ///< numbered parameter, when name is empty
+  std::string name;  ///< named parameter (lower case)
+  double value = 0.0;
+  int column = 0;
+};
+
+/// An O-word statement: o100 sub, o<name> call [1] [2], o1 while [#1 LT 3], ...
+struct OWord {
+  std::string label;              ///< "100" or "<name>" (lower case)
+  std::string keyword;            ///< sub endsub call return do while endwhile if elseif else endif
+                                  ///< repeat endrepeat break continue
+  std::vector<double> arguments;  ///< call arguments, or the one expression of while/if/...
+  int column = 0;
+};
+
+/// One parsed line.
+struct Block {
+  bool blockDelete = false;  ///< the line starts with '/'
+  bool percent = false;      ///< the line is a '%' program delimiter
+  std::vector<Word> words;
+  std::vector<Assignment> assignments;
+  bool hasOWord = false;
+  OWord oword;
+  std::vector<std::string> comments;
+};
+
+/// Thrown by the parser: column (1-based) and message "expected ..., found ...".
+struct ParseFailure {
+  int column;
+  std::string message;
+};
+
+/// Parse one line. Throws ParseFailure.
+Block parseLine(std::string_view line, const ParameterSource& params);
+
+/// Only the O-word of a line, without evaluating anything (for indexing control flow);
+/// false when the line has none. Never throws.
+bool peekOWord(std::string_view line, std::string& label, std::string& keyword);
+
+}  // namespace engage::gcode

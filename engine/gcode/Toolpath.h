@@ -1,0 +1,66 @@
+#pragma once
+/// \file Toolpath.h
+/// The interpreted tool path: a list of moves in machine coordinates (mm), each pointing
+/// back at its source file and line. Knows nothing of voxels or cutters.
+///
+/// Positions are the controlled point (the tool tip) in machine coordinates after work
+/// offsets (G54-G59.3, G92), as LinuxCNC's interpreter reports them: tool length offsets
+/// (G43) move the spindle, not the tip, and are not added.
+
+#include <Eigen/Core>
+
+#include <string>
+#include <vector>
+
+namespace engage {
+
+/// What a move does.
+enum class MoveKind { Rapid, Line, Arc, Spline };
+
+/// Arc plane (G17, G18, G19). Arcs turn about the plane's normal: +Z, +Y, +X respectively.
+enum class Plane { XY, XZ, YZ };
+
+/// "rapid", "line", "arc", "spline".
+const char* moveKindName(MoveKind kind);
+/// "XY", "XZ", "YZ".
+const char* planeName(Plane plane);
+
+/// One interpreted move.
+struct Move {
+  MoveKind kind = MoveKind::Line;
+  Eigen::Vector3d start{0.0, 0.0, 0.0};  ///< mm, machine coordinates
+  Eigen::Vector3d end{0.0, 0.0, 0.0};    ///< mm
+  /// Arcs: the centre, in the plane, at the start's height along the plane normal. mm.
+  Eigen::Vector3d center{0.0, 0.0, 0.0};
+  Plane plane = Plane::XY;
+  /// Arcs: + counter-clockwise (G3), - clockwise (G2) about the plane normal; the magnitude
+  /// is the P word (number of turns, 1 by default). 0 for other moves.
+  int turns = 0;
+  /// Splines: the line pieces approximating the curve within 0.001 mm, ending at `end`
+  /// (the start is `start`). Empty for other moves.
+  std::vector<Eigen::Vector3d> points;
+  double feed = 0.0;        ///< programmed feed of the tool tip, mm/min (0 for rapids)
+  double spindleRpm = 0.0;  ///< signed: + M3, - M4, 0 stopped
+  int tool = 0;             ///< tool number in the spindle
+  int file = 0;             ///< index into Toolpath::files
+  int line = 0;             ///< 1-based source line
+};
+
+/// The whole interpreted program.
+struct Toolpath {
+  std::vector<Move> moves;
+  std::vector<std::string> files;  ///< source files (main program first, then subroutine files)
+  bool inch = false;               ///< the program's units (the last G20/G21 seen)
+};
+
+/// Arcs: radius in the plane, mm.
+double arcRadius(const Move& arc);
+/// Arcs: signed swept angle, radians (+ counter-clockwise about the plane normal).
+double arcSweep(const Move& arc);
+/// Path length of a move, mm (helices include the axial travel).
+double moveLength(const Move& move);
+/// Position at arc length fraction t in [0, 1] along a move (arcs and helices exactly,
+/// splines along their line pieces). mm.
+Eigen::Vector3d pointAt(const Move& move, double t);
+
+}  // namespace engage
