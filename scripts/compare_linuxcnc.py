@@ -195,9 +195,9 @@ def main():
                     if m["end"] is None:
                         f.write("spline,,,,,,,,\n")
                     elif m["kind"] == "arc":
-                        f.write("arc,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%s,%d\n" % (*m["end"], *m["center"], m["plane"], m["turns"]))
+                        f.write("arc,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%s,%d\n" % (*m["end"], *m["center"], m["plane"], m["turns"]))
                     else:
-                        f.write("%s,%.4f,%.4f,%.4f,,,,,\n" % (m["kind"], *m["end"]))
+                        f.write("%s,%.6f,%.6f,%.6f,,,,,\n" % (m["kind"], *m["end"]))
     sys.exit(1 if failures else 0)
 
 

@@ -341,6 +341,10 @@ class Interpreter final : public gcode::ParameterSource {
 
   // ---------------------------------------------------------------- units and frames
   double unit() const { return inch_ ? kInch : 1.0; }
+  /// A length in program units with its unit, for messages.
+  std::string length(double programValue) const {
+    return num(programValue) + (inch_ ? " in" : " mm");
+  }
   Vector3d workOffset() const {
     const int cs = static_cast<int>(params_[5220]);
     const std::size_t base = static_cast<std::size_t>(5221 + 20 * (cs - 1));
@@ -1188,6 +1192,11 @@ class Interpreter final : public gcode::ParameterSource {
       turns = static_cast<int>(std::lround(p));
     }
     m.turns = ccw ? turns : -turns;
+    const char offPlane = plane_ == Plane::XY ? 'K' : plane_ == Plane::XZ ? 'J' : 'I';
+    if (w.has(offPlane))
+      fail(w.column(offPlane), std::string("expected ") + ax.ia + "/" + ax.ib +
+                                   " centre words for an arc in the " + planeName(plane_) +
+                                   " plane, found " + offPlane);
     const double sa = pos_[ax.a], sb = pos_[ax.b], ea = end[ax.a], eb = end[ax.b];
     double ca = 0.0, cb = 0.0;
     if (w.has('R')) {
@@ -1204,7 +1213,7 @@ class Interpreter final : public gcode::ParameterSource {
       const double r = std::abs(radius);
       if (half - r > tol)
         fail(w.column('R'), "expected an arc radius that reaches the end point (at least " +
-                                num(half / unit()) + "), found R" + num(w.get('R')));
+                                length(half / unit()) + "), found R" + num(w.get('R')));
       if (half / r > 1.0 - 1e-12) half = r;
       const double chordAngle = std::atan2(eb - sb, ea - sa);
       const double theta = ((!ccw && radius > 0.0) || (ccw && radius < 0.0)) ? chordAngle - kHalfPi
@@ -1232,10 +1241,10 @@ class Interpreter final : public gcode::ParameterSource {
       if (r1 < 0.1 * tol || r2 < 0.1 * tol)
         fail(column, "expected an arc of non-zero radius, found radius 0");
       if (std::abs(r1 - r2) > tol)
-        fail(column, "expected the arc's end on its circle (radius to start " + num(r1 / unit()) +
-                         ", to end " + num(r2 / unit()) + "), found them " +
-                         num(std::abs(r1 - r2) / unit()) + " apart, more than " +
-                         num(tol / unit()));
+        fail(column, "expected the arc's end on its circle (radius to start " +
+                         length(r1 / unit()) + ", to end " + length(r2 / unit()) +
+                         "), found them " + length(std::abs(r1 - r2) / unit()) +
+                         " apart, more than " + length(tol / unit()));
     }
     m.center = pos_;
     m.center[ax.a] = ca;
@@ -1376,11 +1385,15 @@ class Interpreter final : public gcode::ParameterSource {
       if (repeats < 0)
         fail(w.column('L'), "expected a repeat count L >= 0, found L" + num(w.get('L')));
     }
+    // Below the R plane: climb to R first, where the tool is.
     if (oldZ < r) {
       emitLinear(MoveKind::Rapid, Vector3d(pos_.x(), pos_.y(), r));
       oldZ = r;
     }
     const double clear = retractToR_ ? r : oldZ;
+    // The first positioning rapid runs at the current height with G99 and at the initial
+    // level with G98 (LinuxCNC 2.9 as packaged in Debian 12); later repeats at `clear`.
+    double level = retractToR_ ? std::max(pos_.z(), r) : oldZ;
     double x = pos_.x(), y = pos_.y();
     const Vector3d program = programPosition();
     for (int i = 0; i < repeats; ++i) {
@@ -1396,7 +1409,7 @@ class Interpreter final : public gcode::ParameterSource {
         x = (w.has('X') ? w.get('X') : program.x()) * unit() + offset.x();
         y = (w.has('Y') ? w.get('Y') : program.y()) * unit() + offset.y();
       }
-      emitLinear(MoveKind::Rapid, Vector3d(x, y, oldZ));
+      emitLinear(MoveKind::Rapid, Vector3d(x, y, level));
       emitLinear(MoveKind::Rapid, Vector3d(x, y, r));
       const double f = [&] { return feedFor(1.0, w, column); }();
       auto feedTo = [&](double z) {
@@ -1437,7 +1450,7 @@ class Interpreter final : public gcode::ParameterSource {
         default:
           break;
       }
-      oldZ = clear;
+      level = clear;
     }
   }
 

@@ -34,17 +34,28 @@ void subdivide(const Curve& f, double t0, double t1, const Eigen::Vector2d& a,
   subdivide(f, t0 + 0.5 * dt, t1, q2, b, tolerance, depth + 1, out);
 }
 
-std::vector<Eigen::Vector2d> flatten(const Curve& f, double tolerance) {
-  // Start from 8 spans so that an S-shaped span cannot hide behind a straight chord.
+/// Flatten f over [0, 1]. `breaks` are parameters where f may have a corner (NURBS knots):
+/// each smooth piece between them is split into 8 spans first, so that an S-shaped span
+/// cannot hide behind a straight chord, then bisected to the tolerance.
+std::vector<Eigen::Vector2d> flatten(const Curve& f, double tolerance,
+                                     std::vector<double> breaks = {}) {
+  breaks.push_back(0.0);
+  breaks.push_back(1.0);
+  std::sort(breaks.begin(), breaks.end());
+  breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
   std::vector<Eigen::Vector2d> out;
   constexpr int kSpans = 8;
   Eigen::Vector2d a = f(0.0);
-  for (int i = 0; i < kSpans; ++i) {
-    const double t0 = static_cast<double>(i) / kSpans;
-    const double t1 = static_cast<double>(i + 1) / kSpans;
-    const Eigen::Vector2d b = f(t1);
-    subdivide(f, t0, t1, a, b, tolerance, 0, out);
-    a = b;
+  for (std::size_t k = 0; k + 1 < breaks.size(); ++k) {
+    const double lo = breaks[k];
+    const double hi = breaks[k + 1];
+    for (int i = 0; i < kSpans; ++i) {
+      const double t0 = lo + (hi - lo) * i / kSpans;
+      const double t1 = i + 1 == kSpans ? hi : lo + (hi - lo) * (i + 1) / kSpans;
+      const Eigen::Vector2d b = f(t1);
+      subdivide(f, t0, t1, a, b, tolerance, 0, out);
+      a = b;
+    }
   }
   return out;
 }
@@ -111,7 +122,8 @@ std::vector<Eigen::Vector2d> flattenNurbs(const std::vector<Eigen::Vector2d>& cp
     const Eigen::Vector3d& h = d[static_cast<std::size_t>(k - 1)];
     return Eigen::Vector2d(h.x() / h.z(), h.y() / h.z());
   };
-  std::vector<Eigen::Vector2d> out = flatten(eval, tolerance);
+  // Knot values are where a NURBS may have corners (degree 1) or curvature jumps.
+  std::vector<Eigen::Vector2d> out = flatten(eval, tolerance, knots);
   out.back() = cp.back();  // clamped: the curve ends exactly on the last control point
   return out;
 }

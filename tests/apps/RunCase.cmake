@@ -1,5 +1,8 @@
 # Run one golden case (see CMakeLists.txt beside this file).
+cmake_minimum_required(VERSION 3.22)
 file(STRINGS ${CASE}/args args)
+# @DATA@ in the arguments stands for the repository's data/ folder.
+string(REPLACE "@DATA@" "${DATA}" args "${args}")
 file(READ ${CASE}/exit expected_exit)
 string(STRIP "${expected_exit}" expected_exit)
 execute_process(COMMAND ${ENGAGE} ${args}
@@ -9,6 +12,7 @@ if(NOT exit_code STREQUAL expected_exit)
 endif()
 if(EXISTS ${CASE}/stdout)
   file(READ ${CASE}/stdout expected_out)
+  string(REPLACE "@DATA@" "${DATA}" expected_out "${expected_out}")
   if(NOT out STREQUAL expected_out)
     file(WRITE ${ACTUAL} "${out}")
     message(FATAL_ERROR "stdout differs from ${CASE}/stdout (actual output in ${ACTUAL}):\n${out}")

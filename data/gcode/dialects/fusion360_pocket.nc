@@ -1,0 +1,55 @@
+%
+(1001)
+(Machine)
+(  vendor: Autodesk)
+(  description: Generic 3-axis)
+(T1 D=6 CR=0 - ZMIN=-3 - flat end mill)
+G90 G94 G17
+G21
+
+(2D Pocket1)
+G28 G91 Z0.
+G90
+
+(2D POCKET)
+T1 M6
+S10000 M3
+G54
+M8
+G0 X12. Y20.
+G43 Z15. H1
+G0 Z5.
+G1 Z1. F1000.
+G1 Z-1.5 F300.
+G3 X14. Y18. I2. J0. F800.
+G1 X46.
+G3 X48. Y20. I0. J2.
+G1 Y40.
+G3 X46. Y42. I-2. J0.
+G1 X14.
+G3 X12. Y40. I0. J-2.
+G1 Y20.
+G1 X16.5 F800.
+G1 Y37.5
+G1 X43.5
+G1 Y24.5
+G1 X16.5
+G2 X16.5 Y24.5 I3. J0. F600.
+G1 Z-3. F300.
+G1 X14. Y20. F800.
+G3 X16. Y18. R2.
+G1 X46.
+G3 X48. Y20. R2.
+G1 Y40.
+G2 X30. Y46. R-12.
+G1 X12. Y40.
+G0 Z15.
+G17
+M9
+G28 G91 Z0.
+G90
+G28 G91 X0. Y0.
+G90
+M5
+M30
+%

@@ -1,0 +1,338 @@
+// Tests of engine/gcode/GcodeReader.h: LinuxCNC's interpretation (golden files made with
+// LinuxCNC's rs274 by scripts/compare_linuxcnc.py), semantics checked by hand, and errors.
+
+#include "engine/gcode/GcodeReader.h"
+#include "engine/gcode/GcodeError.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace engage;
+using Catch::Matchers::Contains;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// Hand-computed positions are exact decimal numbers; 1e-9 mm is round-off.
+constexpr double kExact = 1e-9;
+
+Toolpath run(const std::string& text, const ReaderOptions& options = {}) {
+  return readProgramText(text, "test.ngc", options);
+}
+
+std::vector<Move> moves(const std::string& text) {
+  return run(text).moves;
+}
+
+void checkPoint(const Eigen::Vector3d& p, double x, double y, double z, double tol = kExact) {
+  CHECK(p.x() == Approx(x).margin(tol));
+  CHECK(p.y() == Approx(y).margin(tol));
+  CHECK(p.z() == Approx(z).margin(tol));
+}
+
+/// Message of the GcodeError a program throws ("" when it does not throw).
+std::string errorOf(const std::string& text) {
+  try {
+    run(text);
+  } catch (const GcodeError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+struct GoldenMove {
+  std::string kind;
+  Eigen::Vector3d end{0, 0, 0};
+  Eigen::Vector3d center{0, 0, 0};
+  int turns = 0;
+};
+
+std::vector<GoldenMove> readGolden(const std::string& path) {
+  std::ifstream in(path);
+  REQUIRE(in.good());
+  std::string line;
+  std::getline(in, line);  // header
+  std::vector<GoldenMove> out;
+  while (std::getline(in, line)) {
+    std::vector<std::string> c;
+    std::stringstream s(line);
+    std::string cell;
+    while (std::getline(s, cell, ','))
+      c.push_back(cell);
+    c.resize(9);
+    GoldenMove g;
+    g.kind = c[0];
+    if (g.kind != "spline") g.end = {std::stod(c[1]), std::stod(c[2]), std::stod(c[3])};
+    if (g.kind == "arc") {
+      g.center = {std::stod(c[4]), std::stod(c[5]), std::stod(c[6])};
+      g.turns = std::stoi(c[8]);
+    }
+    out.push_back(g);
+  }
+  return out;
+}
+
+/// Moves without zero-length rapids and lines (LinuxCNC's output drops none, ours neither;
+/// the comparison script drops them on both sides).
+std::vector<Move> withoutZeroLength(const std::vector<Move>& in) {
+  std::vector<Move> out;
+  Eigen::Vector3d pos(0, 0, 0);
+  for (const Move& m : in) {
+    if ((m.kind == MoveKind::Rapid || m.kind == MoveKind::Line) &&
+        (m.end - pos).cwiseAbs().maxCoeff() < 1e-9)
+      continue;
+    out.push_back(m);
+    pos = m.end;
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("programs in the dialects users bring interpret as LinuxCNC's rs274 does", "[gcode]") {
+  // Goldens: LinuxCNC 2.9 rs274 output (4 decimals of the program unit), converted to mm in
+  // machine coordinates. Tolerance 0.002 mm: the bound, above rs274's rounding
+  // (0.00005 in = 0.00127 mm).
+  const std::string data = ENGAGE_SOURCE_DIR "/data/gcode/";
+  const std::string golden = ENGAGE_SOURCE_DIR "/tests/data/linuxcnc-golden/";
+  ReaderOptions options;
+  options.toolTable = data + "linuxcnc/tools.tbl";
+  options.toolTableInch = true;  // rs274 without an INI file reads tool tables in inches
+  for (const char* name : {"fusion360_pocket.nc", "freecad_profile.ngc", "grbl_engrave.gcode",
+                           "inch_helix.ngc", "linuxcnc_features.ngc"}) {
+    INFO(name);
+    const std::string stem = std::string(name).substr(0, std::string(name).find('.'));
+    const auto expected = readGolden(golden + stem + ".csv");
+    const auto got = withoutZeroLength(readProgram(data + "dialects/" + name, options).moves);
+    REQUIRE(got.size() == expected.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      INFO("move " << i + 1 << " (line " << got[i].line << ")");
+      CHECK(std::string(moveKindName(got[i].kind)) == expected[i].kind);
+      if (expected[i].kind == "spline") continue;  // rs274 prints no spline end point
+      CHECK((got[i].end - expected[i].end).cwiseAbs().maxCoeff() <= 0.002);
+      if (expected[i].kind == "arc") {
+        CHECK((got[i].center - expected[i].center).cwiseAbs().maxCoeff() <= 0.002);
+        CHECK(got[i].turns == expected[i].turns);
+      }
+    }
+  }
+}
+
+TEST_CASE("units, distance modes and feeds", "[gcode]") {
+  SECTION("G20 converts lengths and feeds to mm where they are read") {
+    const auto m = moves("G20 G90\nG1 X1 Y-0.5 F10\nM2\n");
+    checkPoint(m[0].end, 25.4, -12.7, 0.0);
+    CHECK(m[0].feed == Approx(254.0).epsilon(1e-12));
+  }
+  SECTION("G91 adds to the current position") {
+    const auto m = moves("G21 G0 X10 Y10\nG91 G0 X5 Y-2 Z1\nX1\nM2\n");
+    checkPoint(m[1].end, 15, 8, 1);
+    checkPoint(m[2].end, 16, 8, 1);
+  }
+  SECTION("G93 inverse time: feed = length x F; G95: F x S") {
+    const auto m = moves("G21 G93 G1 X10 F2\nG94 G1 X20 F300\nS1000 M3 G95 G1 X30 F0.1\nM2\n");
+    CHECK(m[0].feed == Approx(20.0).epsilon(1e-12));  // 10 mm in 1/2 min
+    CHECK(m[1].feed == Approx(300.0).epsilon(1e-12));
+    CHECK(m[2].feed == Approx(100.0).epsilon(1e-12));  // 0.1 mm/rev x 1000 rpm
+    CHECK(m[2].spindleRpm == Approx(1000.0));
+  }
+  SECTION("a line's parameter reads see the values before its assignments") {
+    const auto m = moves("#1=1\n#1=5 #2=#1\nG0 X#2 Y#1\nM2\n");
+    checkPoint(m[0].end, 1, 5, 0);
+  }
+  SECTION("expressions, functions and operator precedence") {
+    // 2 + 3 * 4**2 = 50; -7 MOD 3 = 2 (LinuxCNC's modulus is non-negative); ATAN[1]/[1] = 45
+    // degrees; ROUND[2.5] = 3; FIX[-2.5] = -3; FUP[2.1] = 3; [1 EQ 1.00001] is true (0.0001
+    // tolerance); SIN[30] = 0.5.
+    const auto m = moves(
+        "G0 X[2+3*4**2] Y[-7 MOD 3] Z[ATAN[1]/[1]]\n"
+        "G0 X[ROUND[2.5]] Y[FIX[-2.5]] Z[FUP[2.1]]\n"
+        "G0 X[1 EQ 1.00001] Y[SIN[30]] Z[EXISTS[#<nope>]]\nM2\n");
+    checkPoint(m[0].end, 50, 2, 45);
+    checkPoint(m[1].end, 3, -3, 3);
+    checkPoint(m[2].end, 1, 0.5, 0, 1e-12);
+  }
+  SECTION("comments, N words, block delete, %, spaces inside numbers") {
+    const auto m = moves("%\nN10 G0 X1 (move) ; tail\n/G0 X5\nG 0 X 1 2 . 5\n%\nG0 X99\n");
+    REQUIRE(m.size() == 3);
+    checkPoint(m[1].end, 5, 0, 0);  // block delete is off by default, as in LinuxCNC
+    checkPoint(m[2].end, 12.5, 0, 0);
+    ReaderOptions skip;
+    skip.blockDelete = true;
+    CHECK(run("G0 X1\n/G0 X5\nM2\n", skip).moves.size() == 1);
+  }
+}
+
+TEST_CASE("arcs: R form, centres, helices, planes", "[gcode]") {
+  SECTION("G3 with positive R takes the short way: centre left of the chord") {
+    // (0,0) -> (10,0), R 10: centre (5, sqrt(75)), sweep +60 deg.
+    const auto m = moves("G0 X0 Y0\nG3 X10 Y0 R10 F100\nM2\n");
+    checkPoint(m[1].center, 5, std::sqrt(75.0), 0);
+    CHECK(arcSweep(m[1]) == Approx(kPi / 3).epsilon(1e-12));
+  }
+  SECTION("negative R takes the long way") {
+    const auto m = moves("G0 X0 Y0\nG3 X10 Y0 R-10 F100\nM2\n");
+    checkPoint(m[1].center, 5, -std::sqrt(75.0), 0);
+    CHECK(arcSweep(m[1]) == Approx(2 * kPi - kPi / 3).epsilon(1e-12));
+  }
+  SECTION("helix with P turns: two full turns and 3 mm down") {
+    const auto m = moves("G0 X10 Y0 Z0\nG3 X10 Y0 Z-3 I-10 J0 P2 F100\nM2\n");
+    CHECK(m[1].turns == 2);
+    CHECK(arcSweep(m[1]) == Approx(4 * kPi).epsilon(1e-12));
+    CHECK(moveLength(m[1]) == Approx(std::hypot(40 * kPi, 3.0)).epsilon(1e-12));
+  }
+  SECTION("G90.1 absolute centres; G2 clockwise is negative") {
+    const auto m = moves("G0 X10 Y0\nG90.1 G2 X0 Y-10 I0 J0 F100\nM2\n");
+    checkPoint(m[1].center, 0, 0, 0);
+    CHECK(m[1].turns == -1);
+    CHECK(arcSweep(m[1]) == Approx(-kPi / 2).epsilon(1e-12));
+  }
+  SECTION("G18 arcs turn about +Y: G3 from (0,0,0) around (5,0,0) passes z = +5") {
+    const auto m = moves("G0 X0 Y0 Z0\nG18 G3 X10 Z0 I5 K0 F100\nM2\n");
+    checkPoint(pointAt(m[1], 0.5), 5, 0, 5);
+  }
+}
+
+TEST_CASE("offsets and coordinate systems", "[gcode]") {
+  SECTION("G10 L2 and G55: machine = program + offset") {
+    const auto m = moves("G10 L2 P2 X100 Y50 Z-5\nG55 G0 X1 Y2 Z3\nG54 G0 X1\nM2\n");
+    checkPoint(m[0].end, 101, 52, -2);
+    checkPoint(m[1].end, 1, 52, -2);
+  }
+  SECTION("G92 makes the current point the given one; G92.1 cancels") {
+    const auto m = moves("G0 X10 Y10\nG92 X0 Y0\nG0 X5 Y5\nG92.1\nG0 X5\nM2\n");
+    checkPoint(m[1].end, 15, 15, 0);
+    checkPoint(m[2].end, 5, 15, 0);
+  }
+  SECTION("G53 and G28 position the spindle; the tip is one tool length lower") {
+    // Tool 1: 10 mm. G43 at Z 20 lowers the tip to 10 without motion; G53 Z0 puts the tip at -10.
+    ReaderOptions o;
+    o.toolTable = ENGAGE_SOURCE_DIR "/tests/data/tools_mm.tbl";
+    const auto m = run("G0 Z20\nT1 M6\nG43 H1\nG0 X1\nG53 G0 Z0\nG28\nM2\n", o).moves;
+    checkPoint(m[1].end, 1, 0, 10);
+    checkPoint(m[2].end, 1, 0, -10);
+    checkPoint(m[3].end, 0, 0, -10);
+  }
+}
+
+TEST_CASE("canned cycles as LinuxCNC expands them", "[gcode]") {
+  // G98 G81 from Z 5, R 1, Z -3: over the hole at 5, down to R, feed to -3, back to 5.
+  // G99 G83 with Q 3: pecks at -2, -5, -8, each followed by a rapid to R and a rapid back to
+  // 0.254 mm above the last depth; last feed to -10; retract to R.
+  const auto m = moves("G0 X0 Y0 Z5\nG98 G81 X10 Y10 Z-3 R1 F100\nG99 G83 X20 Z-10 R1 Q3\nM2\n");
+  const std::vector<std::tuple<MoveKind, double, double, double>> expected = {
+      {MoveKind::Rapid, 0, 0, 5},        {MoveKind::Rapid, 10, 10, 5},
+      {MoveKind::Rapid, 10, 10, 1},      {MoveKind::Line, 10, 10, -3},
+      {MoveKind::Rapid, 10, 10, 5},      {MoveKind::Rapid, 20, 10, 5},
+      {MoveKind::Rapid, 20, 10, 1},      {MoveKind::Line, 20, 10, -2},
+      {MoveKind::Rapid, 20, 10, 1},      {MoveKind::Rapid, 20, 10, -1.746},
+      {MoveKind::Line, 20, 10, -5},      {MoveKind::Rapid, 20, 10, 1},
+      {MoveKind::Rapid, 20, 10, -4.746}, {MoveKind::Line, 20, 10, -8},
+      {MoveKind::Rapid, 20, 10, 1},      {MoveKind::Rapid, 20, 10, -7.746},
+      {MoveKind::Line, 20, 10, -10},     {MoveKind::Rapid, 20, 10, 1}};
+  REQUIRE(m.size() == expected.size());
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    INFO("move " << i);
+    CHECK(m[i].kind == std::get<0>(expected[i]));
+    checkPoint(m[i].end, std::get<1>(expected[i]), std::get<2>(expected[i]),
+               std::get<3>(expected[i]));
+  }
+}
+
+TEST_CASE("subroutines, loops and conditionals", "[gcode]") {
+  const auto m = moves(
+      "o<go> sub\n G0 X#1 Y#2\n o<go> return [#1 + #2]\no<go> endsub\n"
+      "o<go> call [1] [2]\nG0 Z#<_value>\n"                                 // Z 3
+      "#1 = 0\no1 while [#1 LT 3]\n #1 = [#1 + 1]\n G0 X#1\no1 endwhile\n"  // X 1, 2, 3
+      "o2 repeat [2]\n G91 G0 Y1\n G90\no2 endrepeat\n"                     // Y 3, 4
+      "o3 if [#1 EQ 3]\n G0 Z10\no3 elseif [1]\n G0 Z20\no3 else\n G0 Z30\no3 endif\n"
+      "#2 = 0\no4 do\n #2 = [#2 + 1]\n o5 if [#2 EQ 2]\n  o4 continue\n o5 endif\n"
+      " o6 if [#2 EQ 4]\n  o4 break\n o6 endif\n G0 X[#2 * 10]\no4 while [#2 LT 9]\nM2\n");
+  REQUIRE(m.size() == 10);
+  checkPoint(m[0].end, 1, 2, 0);
+  checkPoint(m[1].end, 1, 2, 3);
+  CHECK(m[2].end.x() == 1.0);
+  CHECK(m[4].end.x() == 3.0);
+  CHECK(m[6].end.y() == Approx(4.0));
+  CHECK(m[7].end.z() == 10.0);
+  CHECK(m[8].end.x() == 10.0);  // #2 = 1; 2 continues; 3 prints 30; 4 breaks
+  CHECK(m[9].end.x() == 30.0);
+}
+
+TEST_CASE("splines are flattened within 0.001 mm", "[gcode]") {
+  const auto m = moves("G0 X0 Y0\nG1 F100\nG5 X10 Y0 I2 J5 P-2 Q5\nM2\n");
+  REQUIRE(m[1].kind == MoveKind::Spline);
+  // Closed-form cubic Bezier: P0 (0,0), P1 (2,5), P2 (8,5), P3 (10,0). Every curve point lies
+  // within 0.001 mm (+ round-off) of the polyline.
+  auto bezier = [](double t) {
+    const double u = 1 - t;
+    return Eigen::Vector2d(3 * u * u * t * 2 + 3 * u * t * t * 8 + t * t * t * 10,
+                           3 * u * u * t * 5 + 3 * u * t * t * 5);
+  };
+  std::vector<Eigen::Vector2d> poly{{0, 0}};
+  for (const auto& p : m[1].points)
+    poly.emplace_back(p.x(), p.y());
+  double worst = 0.0;
+  for (int i = 0; i <= 2000; ++i) {
+    const Eigen::Vector2d q = bezier(i / 2000.0);
+    double best = 1e9;
+    for (std::size_t k = 0; k + 1 < poly.size(); ++k) {
+      const Eigen::Vector2d d = poly[k + 1] - poly[k];
+      const double t = std::clamp((q - poly[k]).dot(d) / d.squaredNorm(), 0.0, 1.0);
+      best = std::min(best, (poly[k] + t * d - q).norm());
+    }
+    worst = std::max(worst, best);
+  }
+  CHECK(worst <= 0.001 + 1e-9);
+  checkPoint(m[1].end, 10, 0, 0);
+}
+
+TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]") {
+  CHECK_THAT(errorOf("G0 X0\nG41 G1 X10 F100\n"),
+             Contains("test.ngc:2:1: expected G40") && Contains("found G41"));
+  CHECK_THAT(errorOf("G12 X1\n"), Contains("test.ngc:1:1: expected a known G code, found G12"));
+  CHECK_THAT(errorOf("M123\n"), Contains("found M123 (user M codes"));
+  CHECK_THAT(
+      errorOf("G1 G2 X1 F1\n"),
+      Contains("1:4: expected at most one G code of modal group 1 per line, found G1 and G2"));
+  CHECK_THAT(errorOf("G0 X0 Y0\nG2 X10 Y1 I5 J0 F100\n"),
+             Contains("2:1: expected the arc's end on its circle"));
+  CHECK_THAT(
+      errorOf("G0 X0 Y0\nG2 X10 Y0 R4 F100\n"),
+      Contains(
+          "2:11: expected an arc radius that reaches the end point (at least 5 mm), found R4"));
+  CHECK_THAT(errorOf("G0 X0 Y0\nG2 X0 Y0 R4 F100\n"),
+             Contains("expected an R-form arc to end elsewhere"));
+  CHECK_THAT(errorOf("G0 X0 Y0\nG2 X10 Y0 I5 K0 F100\n"),
+             Contains("2:14: expected I/J centre words for an arc in the XY plane, found K"));
+  CHECK_THAT(errorOf("G1 X10\n"),
+             Contains("1:1: expected a positive F word before the first feed move, found feed 0"));
+  CHECK_THAT(errorOf("G1 X10 F100 (open comment\n"),
+             Contains("1:13: expected ')' closing this comment"));
+  CHECK_THAT(errorOf("G1 X10 $\n"),
+             Contains("1:8: expected a word letter (G, M, X, F, ...), found '$'"));
+  CHECK_THAT(errorOf("G0 A10\n"), Contains("1:4: expected X, Y or Z axis words"));
+  CHECK_THAT(errorOf("X10\n"), Contains("expected a motion mode"));
+  CHECK_THAT(errorOf("o<nowhere> call\n"), Contains("expected a subroutine o<nowhere>"));
+  CHECK_THAT(errorOf("G0 X[1/0]\n"),
+             Contains("1:7: expected a non-zero divisor, found division by zero"));
+  CHECK_THAT(errorOf("G0 X#<unset>\n"),
+             Contains("1:5: expected a parameter that has a value, found #<unset> unset"));
+  CHECK_THAT(errorOf("G0 X[SQRT[-1]]\n"), Contains("expected a non-negative SQRT argument"));
+  CHECK_THAT(errorOf("#6000=1\n"), Contains("expected a parameter number in 1..5602, found #6000"));
+  CHECK_THAT(errorOf("G0 X1 X2\n"),
+             Contains("1:7: expected one X word per line, found a second X"));
+  CHECK_THAT(errorOf("G81 X1 Z-1 F10\n"), Contains("expected an R word"));
+  CHECK_THAT(errorOf("G38.2 Z-1 F10\n"), Contains("probing"));
+  ReaderOptions limited;
+  limited.maxExecutedLines = 1000;
+  CHECK_THROWS_WITH(run("o1 while [1]\no1 endwhile\n", limited),
+                    Contains("more than 1000 executed lines"));
+  CHECK_THROWS_WITH(readProgram("no/such/program.ngc"),
+                    Contains("cannot read program 'no/such/program.ngc'"));
+}
