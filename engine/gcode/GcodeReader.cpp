@@ -244,8 +244,6 @@ std::string readFile(const std::string& path) {
   return s.str();
 }
 
-enum class FeedMode { UnitsPerMinute, InverseTime, UnitsPerRevolution };
-
 /// The interpreter: modal state, parameters, call stack, and the moves it emits.
 class Interpreter final : public gcode::ParameterSource {
  public:
@@ -763,6 +761,8 @@ class Interpreter final : public gcode::ParameterSource {
   /// Executes a block in LinuxCNC's order; true when the program ends.
   bool executeBlock(const Block& b) {
     if (b.words.empty()) return false;
+    currentBlock_ = &b;
+    blockRecorded_ = false;
     Words w = collect(b);
 
     // Unsupported codes first, with a clear word.
@@ -1081,7 +1081,28 @@ class Interpreter final : public gcode::ParameterSource {
     m.tool = tool_;
     m.file = fileIndexInOutput();
     m.line = line_ + 1;
+    m.inch = inch_;
+    m.incremental = incremental_;
+    m.absoluteArcCenters = !arcIncremental_;
+    m.feedMode = feedMode_;
+    m.workOffset = workOffset();
+    m.block = recordBlock();
     return m;
+  }
+
+  /// Index of the current executed line in Toolpath::blocks, recording it on first use.
+  int recordBlock() const {
+    if (!blockRecorded_) {
+      SourceBlock sb;
+      sb.file = fileIndexInOutput();
+      sb.line = line_ + 1;
+      if (currentBlock_)
+        for (const gcode::Word& w : currentBlock_->words)
+          sb.words.push_back(WordSpan{w.letter, w.column - 1, w.endColumn - 1});
+      out_.blocks.push_back(std::move(sb));
+      blockRecorded_ = true;
+    }
+    return static_cast<int>(out_.blocks.size()) - 1;
   }
   int fileIndexInOutput() const {
     const std::string& name = files_[static_cast<std::size_t>(file_)]->name;
@@ -1329,6 +1350,7 @@ class Interpreter final : public gcode::ParameterSource {
     }
     const auto pts = gcode::flattenNurbs(cp, weights, nurbsOrder_, kSplineTolerance);
     const int saved = line_;
+    recordBlock();  // the G5.3 line carries the curve's F; the move reports its G5.2 line
     line_ = nurbsLine_;
     emitSpline(pts, w, column);
     line_ = saved;
@@ -1467,7 +1489,9 @@ class Interpreter final : public gcode::ParameterSource {
   };
 
   const ReaderOptions& options_;
-  Toolpath out_;
+  mutable Toolpath out_;
+  const Block* currentBlock_ = nullptr;  ///< the line being executed
+  mutable bool blockRecorded_ = false;
   std::vector<std::unique_ptr<SourceFile>> files_;
   int file_ = 0;
   int line_ = 0;

@@ -16,6 +16,7 @@
 /// UVW axes, probing G38, threading G33/G76, lathe modes, boring cycles G86-G88, canned cycles
 /// outside G17, user M codes M100-M199.
 
+#include "cutters/Error.h"
 #include "engine/gcode/Toolpath.h"
 
 #include <string>

@@ -420,6 +420,7 @@ Block parseLine(std::string_view line, const ParameterSource& params) {
     w.letter = polar ? letter : static_cast<char>(std::toupper(static_cast<unsigned char>(letter)));
     w.column = column;
     w.value = in.real();
+    w.endColumn = compact.column(in.pos() - 1) + 1;
     block.words.push_back(w);
   }
   return block;

@@ -32,6 +32,7 @@ struct Word {
   char letter = 0;
   double value = 0.0;
   int column = 0;
+  int endColumn = 0;  ///< 1-based column just after the word's last character
 };
 
 /// #n = v or #<name> = v.

@@ -20,6 +20,9 @@ enum class MoveKind { Rapid, Line, Arc, Spline };
 /// Arc plane (G17, G18, G19). Arcs turn about the plane's normal: +Z, +Y, +X respectively.
 enum class Plane { XY, XZ, YZ };
 
+/// Feed mode the move was programmed in (G94, G93, G95).
+enum class FeedMode { UnitsPerMinute, InverseTime, UnitsPerRevolution };
+
 /// "rapid", "line", "arc", "spline".
 const char* moveKindName(MoveKind kind);
 /// "XY", "XZ", "YZ".
@@ -44,13 +47,37 @@ struct Move {
   int tool = 0;             ///< tool number in the spindle
   int file = 0;             ///< index into Toolpath::files
   int line = 0;             ///< 1-based source line
+  int block = 0;            ///< index into Toolpath::blocks: the executed line it came from
+
+  // How the move was programmed, so that a writer can emit it back in the same terms.
+  bool inch = false;                ///< G20
+  bool incremental = false;         ///< G91
+  bool absoluteArcCenters = false;  ///< G90.1
+  FeedMode feedMode = FeedMode::UnitsPerMinute;
+  /// Machine minus program coordinates (work offset + G92), mm.
+  Eigen::Vector3d workOffset{0.0, 0.0, 0.0};
+};
+
+/// Where a word sits on its source line: [begin, end) 0-based character positions.
+struct WordSpan {
+  char letter = 0;  ///< upper case; '@' and '^' for polar words
+  int begin = 0;
+  int end = 0;
+};
+
+/// One executed source line that produced moves, with the positions of its words.
+struct SourceBlock {
+  int file = 0;
+  int line = 0;  ///< 1-based
+  std::vector<WordSpan> words;
 };
 
 /// The whole interpreted program.
 struct Toolpath {
   std::vector<Move> moves;
-  std::vector<std::string> files;  ///< source files (main program first, then subroutine files)
-  bool inch = false;               ///< the program's units (the last G20/G21 seen)
+  std::vector<std::string> files;   ///< source files (main program first, then subroutine files)
+  std::vector<SourceBlock> blocks;  ///< executed lines that produced moves, in execution order
+  bool inch = false;                ///< the program's units (the last G20/G21 seen)
 };
 
 /// Arcs: radius in the plane, mm.

@@ -1,0 +1,141 @@
+// Tests of engine/gcode/GcodeWriter.h: unchanged programs come back byte for byte; re-fed
+// programs read back to the same geometry within 1e-6 mm with the planned feeds.
+
+#include "engine/gcode/GcodeWriter.h"
+#include "engine/gcode/GcodeReader.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+using namespace engage;
+using Catch::Matchers::Contains;
+
+namespace {
+
+Toolpath read(const std::string& text) {
+  return readProgramText(text, "w.ngc");
+}
+
+/// Largest distance between the two paths sampled at the same arc lengths (every move,
+/// rapids included), mm; the paths must have the same length within 1e-6 mm.
+double pathDistance(const Toolpath& a, const Toolpath& b) {
+  auto total = [](const Toolpath& t) {
+    double s = 0.0;
+    for (const Move& m : t.moves)
+      s += moveLength(m);
+    return s;
+  };
+  const double la = total(a);
+  REQUIRE(std::abs(la - total(b)) < 1e-6);
+  auto at = [](const Toolpath& t, double s) {
+    for (const Move& m : t.moves) {
+      const double l = moveLength(m);
+      if (s <= l) return pointAt(m, l > 0 ? s / l : 1.0);
+      s -= l;
+    }
+    return t.moves.back().end;
+  };
+  double worst = 0.0;
+  for (int i = 0; i <= 5000; ++i)
+    worst = std::max(worst, (at(a, la * i / 5000.0) - at(b, la * i / 5000.0)).norm());
+  return worst;
+}
+
+FeedPlan unchanged(const Toolpath& t) {
+  return FeedPlan(t.moves.size());
+}
+
+}  // namespace
+
+TEST_CASE("an unchanged plan gives the program back byte for byte", "[gcode]") {
+  for (const char* name : {"fusion360_pocket.nc", "linuxcnc_features.ngc", "inch_helix.ngc"}) {
+    std::ifstream in(std::string(ENGAGE_SOURCE_DIR "/data/gcode/dialects/") + name);
+    std::stringstream s;
+    s << in.rdbuf();
+    const Toolpath t = readProgramText(s.str(), name);
+    CHECK(writeProgram(s.str(), t, unchanged(t)) == s.str());
+  }
+}
+
+TEST_CASE("a new feed on one line, and the original F restored on the next", "[gcode]") {
+  const std::string src = "G21 G90\nG0 X0 Y0\nG1 X10 F500 (a)\nG1 X20\nG1 X30\nM2\n";
+  const Toolpath t = read(src);
+  FeedPlan plan = unchanged(t);
+  plan[1] = {{1.0, 250.0}};  // G1 X10 at 250 mm/min
+  const std::string out = writeProgram(src, t, plan);
+  CHECK(out == "G21 G90\nG0 X0 Y0\nG1 X10 F250 (a)\nG1 X20 F500\nG1 X30\nM2\n");
+  const Toolpath back = read(out);
+  CHECK(back.moves[1].feed == 250.0);
+  CHECK(back.moves[2].feed == 500.0);
+  CHECK(back.moves[3].feed == 500.0);
+  CHECK(pathDistance(t, back) < 1e-6);
+}
+
+TEST_CASE("splitting lines and helices where the feed changes", "[gcode]") {
+  const std::string src =
+      "G21 G17 G90\nG0 X10 Y0 Z1\nG1 Z0 F300\n"
+      "G3 X10 Y0 Z-3 I-10 J0 P3 F600 M8 (helix)\nG1 X25 Y7\nG2 X35 Y7 R5\nM2\n";
+  const Toolpath t = read(src);
+  FeedPlan plan = unchanged(t);
+  plan[2] = {{0.1, 200.0}, {0.55, 400.0}, {1.0, 600.0}};  // the helix in three pieces
+  plan[3] = {{0.5, 300.0}, {1.0, 450.0}};                 // the line in two
+  plan[4] = {{0.25, 100.0}, {1.0, 600.0}};                // the R arc as two I/J arcs
+  const std::string out = writeProgram(src, t, plan);
+  INFO(out);
+  const Toolpath back = read(out);
+  REQUIRE(back.moves.size() == t.moves.size() + 2 + 1 + 1);
+  CHECK(pathDistance(t, back) < 1e-6);
+  // Feeds piece by piece; M8 and the comment stay on the helix's first line.
+  CHECK(back.moves[2].feed == 200.0);
+  CHECK(back.moves[3].feed == 400.0);
+  CHECK(back.moves[4].feed == 600.0);
+  CHECK(back.moves[5].feed == 300.0);
+  CHECK(back.moves[6].feed == 450.0);
+  CHECK(back.moves[7].feed == 100.0);
+  CHECK(back.moves[8].feed == 600.0);
+  CHECK_THAT(out, Contains("M8 (helix)"));
+  // The first helix piece is 0.3 of three turns: less than one turn, no P; the second, 1.35 turns:
+  // P2.
+  CHECK(back.moves[2].turns == 1);
+  CHECK(back.moves[3].turns == 2);
+}
+
+TEST_CASE("incremental inch programs split in their own units and modes", "[gcode]") {
+  const std::string src = "G20 G91 G17\nG1 X1 Y1 F20\nG2 X1 Y-1 I1 J0\nG1 X-2\nM2\n";
+  const Toolpath t = read(src);
+  FeedPlan plan = unchanged(t);
+  plan[0] = {{0.5, 10.0 * 25.4}, {1.0, 30.0 * 25.4}};
+  plan[1] = {{0.5, 5.0 * 25.4}, {1.0, 20.0 * 25.4}};
+  const std::string out = writeProgram(src, t, plan);
+  INFO(out);
+  const Toolpath back = read(out);
+  CHECK(pathDistance(t, back) < 1e-6);
+  CHECK(back.moves[0].feed == Approx(254.0));
+  CHECK(back.moves[1].feed == Approx(762.0));
+  CHECK(back.moves[2].feed == Approx(127.0));
+  CHECK(back.moves[4].feed == Approx(508.0));  // restored F20
+  CHECK_THAT(out, Contains("G1 X0.5 Y0.5 F10"));
+}
+
+TEST_CASE("inverse-time programs get an F per piece", "[gcode]") {
+  const std::string src = "G21 G90 G93\nG1 X10 F60\nG1 X20 F30\nM2\n";
+  const Toolpath t = read(src);
+  FeedPlan plan = unchanged(t);
+  plan[0] = {{0.5, 300.0}, {1.0, 1200.0}};  // 5 mm at 300 mm/min: F60; 5 mm at 1200: F240
+  const std::string out = writeProgram(src, t, plan);
+  CHECK(out == "G21 G90 G93\nG1 X5 F60\nG1 X10 F240\nG1 X20 F30\nM2\n");
+}
+
+TEST_CASE("programs that do not run line by line cannot be re-fed in place", "[gcode]") {
+  const std::string src = "G21 F100\no1 repeat [2]\nG91 G1 X1\no1 endrepeat\nM2\n";
+  const Toolpath t = read(src);
+  FeedPlan plan = unchanged(t);
+  plan[0] = {{1.0, 50.0}};
+  CHECK_THROWS_WITH(writeProgram(src, t, plan), Contains("w.ngc:3: this line runs again"));
+  plan = unchanged(t);
+  plan.pop_back();
+  CHECK_THROWS_WITH(writeProgram(src, t, plan), Contains("feed plan has 1 entries for 2 moves"));
+}
