@@ -32,6 +32,8 @@ constexpr double kSplineTolerance = 0.001;
 /// LinuxCNC's arc radius-mismatch tolerances (TOLERANCE_MM, TOLERANCE_INCH).
 constexpr double kArcToleranceMm = 0.005;
 constexpr double kArcToleranceInch = 0.0005;
+/// Work limits of one canned-cycle block (pecks, L repeats): beyond them a typo, not a program.
+constexpr int kMaxPecks = 100000;
 /// LinuxCNC's G83/G73 rapid clearance above the last peck: 0.010 in.
 constexpr double kPeckClearanceInch = 0.010;
 
@@ -1298,15 +1300,29 @@ class Interpreter final : public gcode::ParameterSource {
       if (!(w.has('P') && w.has('Q')))
         fail(column, "expected P and Q on G5, found " + std::string(w.has('P') ? "no Q" : "no P"));
       const Eigen::Vector2d pq(w.get('P') * unit(), w.get('Q') * unit());
-      pts = gcode::flattenCubic(p0, p0 + i, p3 + pq, p3, kSplineTolerance);
+      pts = flattened(
+          column, [&] { return gcode::flattenCubic(p0, p0 + i, p3 + pq, p3, kSplineTolerance); });
       lastCubic_ = pq;
     } else {
       if (!w.has('I') && !w.has('J')) fail(column, "expected I and/or J on G5.1, found neither");
       const Eigen::Vector2d i(w.has('I') ? w.get('I') * unit() : 0.0,
                               w.has('J') ? w.get('J') * unit() : 0.0);
-      pts = gcode::flattenQuadratic(p0, p0 + i, p3, kSplineTolerance);
+      pts = flattened(column,
+                      [&] { return gcode::flattenQuadratic(p0, p0 + i, p3, kSplineTolerance); });
     }
     emitSpline(pts, w, column);
+  }
+
+  /// Runs a flattening, turning its work-limit Error into an error at this line.
+  template <class F>
+  std::vector<Eigen::Vector2d> flattened(int column, F f) const {
+    try {
+      return f();
+    } catch (const GcodeError&) {
+      throw;
+    } catch (const Error& e) {
+      fail(column, e.what());
+    }
   }
 
   void emitSpline(const std::vector<Eigen::Vector2d>& pts, const Words& w, int column) {
@@ -1348,7 +1364,8 @@ class Interpreter final : public gcode::ParameterSource {
       cp.push_back(p);
       weights.push_back(wt);
     }
-    const auto pts = gcode::flattenNurbs(cp, weights, nurbsOrder_, kSplineTolerance);
+    const auto pts = flattened(
+        column, [&] { return gcode::flattenNurbs(cp, weights, nurbsOrder_, kSplineTolerance); });
     const int saved = line_;
     recordBlock();  // the G5.3 line carries the curve's F; the move reports its G5.2 line
     line_ = nurbsLine_;
@@ -1401,11 +1418,16 @@ class Interpreter final : public gcode::ParameterSource {
     if ((motion_ == 830 || motion_ == 730) && !(cycleQ_ > 0.0))
       fail(column, "expected a positive peck depth Q for " + codeName('G', motion_) + ", found Q" +
                        num(cycleQ_));
+    if ((motion_ == 830 || motion_ == 730) && (r - bottom) / (cycleQ_ * unit()) > kMaxPecks)
+      fail(column, "expected at most " + std::to_string(kMaxPecks) + " pecks, found Q" +
+                       num(cycleQ_) + " over a depth of " + length((r - bottom) / unit()));
     int repeats = 1;
     if (w.has('L')) {
-      repeats = static_cast<int>(std::lround(w.get('L')));
-      if (repeats < 0)
-        fail(w.column('L'), "expected a repeat count L >= 0, found L" + num(w.get('L')));
+      const double l = w.get('L');
+      if (!(l >= 0.0 && l <= kMaxPecks))
+        fail(w.column('L'),
+             "expected a repeat count L in 0.." + std::to_string(kMaxPecks) + ", found L" + num(l));
+      repeats = static_cast<int>(std::lround(l));
     }
     // Below the R plane: climb to R first, where the tool is.
     if (oldZ < r) {

@@ -1,5 +1,7 @@
 #include "engine/gcode/Spline.h"
 
+#include "cutters/Error.h"
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -8,6 +10,8 @@ namespace engage::gcode {
 namespace {
 
 using Curve = std::function<Eigen::Vector2d(double)>;
+/// Work limit of one curve: huge coordinates could never meet the tolerance in doubles.
+constexpr std::size_t kMaxPieces = 100000;
 
 double distanceToChord(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
                        const Eigen::Vector2d& b) {
@@ -28,6 +32,9 @@ void subdivide(const Curve& f, double t0, double t1, const Eigen::Vector2d& a,
       std::max({distanceToChord(q1, a, b), distanceToChord(q2, a, b), distanceToChord(q3, a, b)});
   if (error <= tolerance || depth >= 24) {
     out.push_back(b);
+    if (out.size() > kMaxPieces)
+      throw Error("expected a curve that flattens within " + std::to_string(tolerance) +
+                  " mm in at most " + std::to_string(kMaxPieces) + " line pieces, found more");
     return;
   }
   subdivide(f, t0, t0 + 0.5 * dt, a, q2, tolerance, depth + 1, out);

@@ -11,7 +11,8 @@ namespace engage::gcode {
 
 /// Points after the start (the last one is the curve's end) of a polyline that stays within
 /// `tolerance` (mm) of the curve: every piece is bisected until the curve points at 1/4, 1/2
-/// and 3/4 of its parameter span lie within the tolerance of its chord.
+/// and 3/4 of its parameter span lie within the tolerance of its chord. Throws Error when a
+/// curve needs more than 100000 pieces (coordinates too large for the tolerance).
 std::vector<Eigen::Vector2d> flattenCubic(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
                                           const Eigen::Vector2d& p2, const Eigen::Vector2d& p3,
                                           double tolerance);

@@ -1,0 +1,174 @@
+#include "cutters/Sweep.h"
+
+#include "cutters/Error.h"
+#include "cutters/Tolerances.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace engage {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kTwoPi = 2.0 * kPi;
+/// Height change below which a step counts as horizontal, mm.
+constexpr double kFlatZ = 1e-9;
+
+double distanceToSegment2d(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                           const Eigen::Vector2d& b) {
+  const Eigen::Vector2d d = b - a;
+  const double len2 = d.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+  return (a + t * d - p).norm();
+}
+
+/// Is angle `a` within the sweep that starts at a0 and turns by `sweep` (signed)?
+bool withinSweep(double a, double a0, double sweep) {
+  if (std::abs(sweep) >= kTwoPi) return true;
+  double d = sweep >= 0.0 ? a - a0 : a0 - a;
+  d = std::fmod(d, kTwoPi);
+  if (d < 0.0) d += kTwoPi;
+  return d <= std::abs(sweep);
+}
+
+}  // namespace
+
+Eigen::Vector3d StepPath::at(double u) const {
+  u = std::clamp(u, 0.0, 1.0);
+  switch (kind) {
+    case Kind::Line:
+      return start + u * (end - start);
+    case Kind::ArcXY: {
+      if (u >= 1.0) return end;
+      const double r = std::hypot(start.x() - center.x(), start.y() - center.y());
+      const double a = std::atan2(start.y() - center.y(), start.x() - center.x()) + u * sweepRad;
+      return {center.x() + r * std::cos(a), center.y() + r * std::sin(a),
+              start.z() + u * (end.z() - start.z())};
+    }
+    case Kind::Polyline: {
+      double total = 0.0;
+      for (std::size_t i = 1; i < points.size(); ++i)
+        total += (points[i] - points[i - 1]).norm();
+      double target = u * total;
+      for (std::size_t i = 1; i < points.size(); ++i) {
+        const double l = (points[i] - points[i - 1]).norm();
+        if (target <= l && l > 0.0) return points[i - 1] + target / l * (points[i] - points[i - 1]);
+        target -= l;
+      }
+      return end;
+    }
+  }
+  return end;
+}
+
+Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
+    : cutter_(cutter), path_(path) {
+  if (!(resolution > 0.0)) throw ParameterError("sweep resolution must be positive");
+  if (path_.kind == StepPath::Kind::Polyline && path_.points.size() < 2)
+    throw ParameterError("a polyline step needs at least two points");
+  // Tip positions that bound the path: ends, polyline points, and the arc's axis extremes.
+  std::vector<Eigen::Vector3d> extremes{path_.start, path_.end};
+  double length = (path_.end - path_.start).norm();
+  bool flatHeight = std::abs(path_.end.z() - path_.start.z()) <= kFlatZ;
+  if (path_.kind == StepPath::Kind::ArcXY) {
+    const double r =
+        std::hypot(path_.start.x() - path_.center.x(), path_.start.y() - path_.center.y());
+    const double a0 =
+        std::atan2(path_.start.y() - path_.center.y(), path_.start.x() - path_.center.x());
+    for (int k = 0; k < 4; ++k) {
+      const double a = k * kPi / 2.0;
+      if (withinSweep(a, a0, path_.sweepRad))
+        extremes.emplace_back(path_.center.x() + r * std::cos(a),
+                              path_.center.y() + r * std::sin(a), path_.start.z());
+    }
+    length = std::hypot(r * std::abs(path_.sweepRad), path_.end.z() - path_.start.z());
+  } else if (path_.kind == StepPath::Kind::Polyline) {
+    extremes.insert(extremes.end(), path_.points.begin(), path_.points.end());
+    length = 0.0;
+    for (std::size_t i = 1; i < path_.points.size(); ++i) {
+      length += (path_.points[i] - path_.points[i - 1]).norm();
+      flatHeight = flatHeight && std::abs(path_.points[i].z() - path_.start.z()) <= kFlatZ;
+    }
+    flatHeight = false;  // polylines always sample (arcs in other planes, splines)
+  }
+  flat_ = flatHeight;
+  Eigen::Vector3d lo = extremes.front();
+  Eigen::Vector3d hi = extremes.front();
+  for (const Eigen::Vector3d& e : extremes) {
+    lo = lo.cwiseMin(e);
+    hi = hi.cwiseMax(e);
+  }
+  const double w = cutter_.maxRadius();
+  bounds_.min = lo - Eigen::Vector3d(w, w, 0.0);
+  bounds_.max = hi + Eigen::Vector3d(w, w, cutter_.height());
+  if (!flat_) {
+    const double spacing = resolution / 4.0;
+    const int n = std::max(2, static_cast<int>(std::ceil(length / spacing)) + 1);
+    samples_.resize(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i)
+      samples_[static_cast<std::size_t>(i)] = static_cast<double>(i) / (n - 1);
+  }
+}
+
+double Sweep::endDistance(const Eigen::Vector3d& p) const {
+  return cutter_.signedDistance(p - path_.end);
+}
+
+double Sweep::signedDistance(const Eigen::Vector3d& p) const {
+  if (!flat_) return sampled(p);
+  const Eigen::Vector2d q(p.x(), p.y());
+  double rho = 0.0;
+  if (path_.kind == StepPath::Kind::Line) {
+    rho = distanceToSegment2d(q, path_.start.head<2>(), path_.end.head<2>());
+  } else {
+    const Eigen::Vector2d c = path_.center.head<2>();
+    const double r = (path_.start.head<2>() - c).norm();
+    const Eigen::Vector2d v = q - c;
+    const double a0 = std::atan2(path_.start.y() - c.y(), path_.start.x() - c.x());
+    if (v.norm() > tol::kLengthMm && withinSweep(std::atan2(v.y(), v.x()), a0, path_.sweepRad))
+      rho = std::abs(v.norm() - r);
+    else
+      rho = std::min((q - path_.start.head<2>()).norm(), (q - path_.end.head<2>()).norm());
+    if (v.norm() <= tol::kLengthMm) rho = r;  // the centre: every arc point is r away
+  }
+  return cutter_.profileSignedDistance(rho, p.z() - path_.start.z());
+}
+
+double Sweep::sampled(const Eigen::Vector3d& p) const {
+  auto f = [&](double u) { return cutter_.signedDistance(p - path_.at(u)); };
+  std::size_t best = 0;
+  double bestValue = f(samples_[0]);
+  for (std::size_t i = 1; i < samples_.size(); ++i) {
+    const double v = f(samples_[i]);
+    if (v < bestValue) {
+      bestValue = v;
+      best = i;
+    }
+  }
+  // Golden-section search on the bracket around the best sample.
+  double a = samples_[best > 0 ? best - 1 : 0];
+  double b = samples_[std::min(best + 1, samples_.size() - 1)];
+  constexpr double kGolden = 0.6180339887498949;
+  double x1 = b - kGolden * (b - a);
+  double x2 = a + kGolden * (b - a);
+  double f1 = f(x1);
+  double f2 = f(x2);
+  for (int it = 0; it < 12; ++it) {
+    if (f1 < f2) {
+      b = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = b - kGolden * (b - a);
+      f1 = f(x1);
+    } else {
+      a = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = a + kGolden * (b - a);
+      f2 = f(x2);
+    }
+  }
+  return std::min({bestValue, f1, f2});
+}
+
+}  // namespace engage

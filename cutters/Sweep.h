@@ -1,0 +1,66 @@
+#pragma once
+/// \file Sweep.h
+/// The solid swept by a cutter over one step of a tool path (tool axis +Z throughout, the
+/// tip following the step): its signed distance and bounds.
+///
+/// Exact where the geometry allows a closed form: a step that keeps its height (a horizontal
+/// line or an XY arc) sweeps the profile along the step's XY path, and since every horizontal
+/// slice of the cutter is a disk on its axis, the distance is the profile's 2D distance at
+/// the XY distance from the path. Steps that change height (plunges, ramps, helices, arcs in
+/// the XZ/YZ planes) take the minimum of the cutter's distance over the tip positions along
+/// the step: sampled every quarter of `resolution`, then refined by golden-section search
+/// around the best sample (exact for the union outside the solid; inside it is the depth
+/// below the nearest instance, which is what a volume-fraction update needs near the surface).
+
+#include "cutters/AptCutter.h"
+
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace engage {
+
+/// The path of the tool tip over one step, mm.
+struct StepPath {
+  enum class Kind { Line, ArcXY, Polyline };
+  Kind kind = Kind::Line;
+  Eigen::Vector3d start{0.0, 0.0, 0.0};
+  Eigen::Vector3d end{0.0, 0.0, 0.0};
+  /// ArcXY: centre (x, y used) and signed sweep, radians (+ counter-clockwise); the height
+  /// goes linearly from start.z to end.z (a helix when they differ).
+  Eigen::Vector3d center{0.0, 0.0, 0.0};
+  double sweepRad = 0.0;
+  /// Polyline: tip positions from start to end (start and end included), for arcs in other
+  /// planes and splines.
+  std::vector<Eigen::Vector3d> points;
+
+  /// Tip position at parameter u in [0, 1] (arc length fraction for lines and arcs).
+  Eigen::Vector3d at(double u) const;
+};
+
+/// The swept solid of one step.
+class Sweep {
+ public:
+  /// `resolution` (mm, e.g. the voxel size) sets the sampling of steps that change height.
+  Sweep(const AptCutter& cutter, const StepPath& path, double resolution);
+
+  /// Signed distance from a world point to the swept solid, mm (negative inside).
+  double signedDistance(const Eigen::Vector3d& p) const;
+  /// Signed distance from a world point to the cutter at the step's end, mm.
+  double endDistance(const Eigen::Vector3d& p) const;
+  /// World bounding box of the swept solid, mm.
+  Box3 bounds() const { return bounds_; }
+  const StepPath& path() const { return path_; }
+  const AptCutter& cutter() const { return cutter_; }
+
+ private:
+  double sampled(const Eigen::Vector3d& p) const;
+
+  AptCutter cutter_;
+  StepPath path_;
+  bool flat_ = false;            ///< the step keeps its height: closed form
+  std::vector<double> samples_;  ///< sample parameters for steps that change height
+  Box3 bounds_;
+};
+
+}  // namespace engage

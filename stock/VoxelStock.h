@@ -1,0 +1,87 @@
+#pragma once
+/// \file VoxelStock.h
+/// The material, as a sparse grid of volume fractions on OpenVDB (kept out of this header).
+///
+/// Each voxel (cell-centred, size h) holds the fraction m in [0, 1] of its volume that is
+/// still material. Removing a step's swept solid S sets
+///     m <- min(m, 1 - clamp(0.5 - d_S / h, 0, 1))
+/// with d_S the signed distance from the voxel centre to S: the fraction a planar boundary at
+/// distance d would leave. This scheme was chosen over a Z-dexel heightfield and over level-set
+/// CSG on measured figures (shared/BUILD-NOTES.md): on a slot cut at 30 deg to the grid its
+/// per-step volume error is 0.035-0.65 % against 0.13-6 % for the heightfield, and it costs a
+/// few microseconds per changed voxel against 25-57 ms per step for CSG.
+///
+/// Cost follows what changes: blocks of air are skipped without a look, material tiles are
+/// split into voxels only where the step reaches, voxels already air are not evaluated, and
+/// leaves the step cannot reach are rejected from one distance at their centre.
+/// Results do not depend on the thread count: per-leaf results are combined in leaf order.
+
+#include "cutters/AptCutter.h"
+#include "cutters/Sweep.h"
+
+#include <memory>
+#include <string>
+
+namespace engage {
+
+/// What one removal did: measured volume and engagement, and the work it cost.
+struct Removal {
+  double volume = 0.0;         ///< removed volume, mm^3
+  double axialDepth = 0.0;     ///< extent of the removed material along the tool axis, mm
+  double radialWidth = 0.0;    ///< extent across the feed direction (at the step end), mm
+  double engagementRad = 0.0;  ///< angle of the cutter's periphery in contact, rad
+  long voxelsChanged = 0;      ///< voxels whose fraction dropped
+  long voxelsVisited = 0;      ///< voxels whose distance was evaluated
+};
+
+/// Sparse-voxel stock of volume fractions.
+class VoxelStock {
+ public:
+  /// A box of material (mm). Voxels that the box covers partly get their covered fraction.
+  /// Throws ParameterError for an empty box, a non-positive voxel size, or a voxel size whose
+  /// grid would not fit in this machine's memory (checked before anything is allocated).
+  static VoxelStock box(const Box3& box, double voxelSize);
+  /// Material inside a closed triangle mesh (STL, OBJ, PLY; read with OpenMesh). Throws
+  /// Error for a missing or unreadable file, ParameterError for an open mesh (naming the
+  /// number of boundary edges) or a voxel size that would not fit in memory.
+  static VoxelStock fromMesh(const std::string& path, double voxelSize);
+
+  VoxelStock(VoxelStock&&) noexcept;
+  VoxelStock& operator=(VoxelStock&&) noexcept;
+  ~VoxelStock();
+
+  /// Voxel size h, mm.
+  double voxelSize() const;
+  /// Material volume: sum of fractions times h^3, mm^3.
+  double volume() const;
+  /// Bounds of the material, mm (empty box when no material is left).
+  Box3 bounds() const;
+  /// Number of voxels stored in leaves (a measure of memory), and bytes used by the grids.
+  long leafVoxelCount() const;
+  std::size_t memoryBytes() const;
+
+  /// Record, for every voxel that loses material, how much it lost, the index of the first
+  /// step that removed material from it, and that step's MRR (for removed.vdb).
+  void captureRemoved(bool on);
+
+  /// Remove one step's swept solid. `step` and `mrr` (mm^3/min) are stored in the capture
+  /// grids when capture is on.
+  Removal remove(const Sweep& sweep, int step = 0, double mrr = 0.0);
+
+  /// Write stock.vdb: grid "stock" (material fraction). Written to a temporary name and
+  /// renamed when complete. Throws Error on I/O failure.
+  void writeStockVdb(const std::string& path) const;
+  /// Write removed.vdb: grids "removed" (fraction removed), "step" (int32, first step) and
+  /// "mrr" (mm^3/min of that step). Requires captureRemoved(true) before the removals.
+  void writeRemovedVdb(const std::string& path) const;
+  /// Write the stock's surface (the 0.5 iso-surface of the fraction) as binary STL with
+  /// outward normals; returns the number of boundary (unpaired) edges, 0 for a closed mesh.
+  std::size_t writeStl(const std::string& path) const;
+
+ private:
+  struct Impl;
+  explicit VoxelStock(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace engage

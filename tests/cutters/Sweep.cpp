@@ -1,0 +1,60 @@
+// Tests of cutters/Sweep.h: distances to swept solids against hand values.
+
+#include "cutters/Sweep.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+using namespace engage;
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}
+
+TEST_CASE("a horizontal line sweeps a stadium of the profile", "[cutters]") {
+  const AptCutter c = AptCutter::flat(6.0, 18.0);
+  StepPath p;
+  p.start = {0, 0, 0};
+  p.end = {10, 0, 0};
+  const Sweep s(c, p, 0.1);
+  CHECK(s.signedDistance({5, 4, 1}) == Approx(1.0));   // beside the middle: 4 - r
+  CHECK(s.signedDistance({13, 0, 1}) == Approx(0.0));  // on the end cap
+  CHECK(s.signedDistance({14, 3, 1}) == Approx(2.0));  // |(14,3)-(10,0)| - 3
+  CHECK(s.signedDistance({5, 0, 1}) == Approx(-1.0));  // inside: 1 above the bottom
+  CHECK(s.signedDistance({5, 0, -2}) == Approx(2.0));  // below the bottom
+  CHECK(s.bounds().min.x() == Approx(-3.0));
+  CHECK(s.bounds().max.x() == Approx(13.0));
+}
+
+TEST_CASE("a horizontal arc sweeps a torus-like band", "[cutters]") {
+  const AptCutter c = AptCutter::flat(2.0, 10.0);
+  StepPath p;
+  p.kind = StepPath::Kind::ArcXY;
+  p.center = {0, 0, 0};
+  p.start = {10, 0, 0};
+  p.end = {0, 10, 0};
+  p.sweepRad = kPi / 2;
+  const Sweep s(c, p, 0.1);
+  const double a = kPi / 4;
+  CHECK(s.signedDistance({12 * std::cos(a), 12 * std::sin(a), 1}) == Approx(1.0));  // 2 out - r
+  CHECK(s.signedDistance({8 * std::cos(a), 8 * std::sin(a), 1}) == Approx(1.0));
+  CHECK(s.signedDistance({10, -3, 1}) == Approx(2.0));  // past the start: 3 from (10,0) - r
+  CHECK(s.bounds().max.y() == Approx(11.0));
+}
+
+TEST_CASE("a plunge and a ramp take the closest tool position", "[cutters]") {
+  const AptCutter c = AptCutter::flat(2.0, 10.0);
+  StepPath p;
+  p.start = {0, 0, 0};
+  p.end = {0, 0, -5};
+  const Sweep plunge(c, p, 0.1);
+  CHECK(plunge.signedDistance({3, 0, -2}) == Approx(2.0).margin(1e-6));
+  CHECK(plunge.signedDistance({0, 0, -6}) == Approx(1.0).margin(1e-6));
+  // Ramp: the tip follows z = -x/2. Below the path the swept bottom is the plane traced by
+  // the leading edge, z = -(x + r)/2; the point (4, 0, -3) is 0.5 below it at x = 4, so
+  // 0.5 / sqrt(1.25) from the plane.
+  p.end = {10, 0, -5};
+  const Sweep ramp(c, p, 0.1);
+  CHECK(ramp.signedDistance({4, 0, -3}) == Approx(0.5 / std::sqrt(1.25)).margin(1e-6));
+}
