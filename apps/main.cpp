@@ -6,6 +6,7 @@
 
 #include "apps/AnalyzeCommand.h"
 #include "apps/MovesCommand.h"
+#include "apps/SimulateCommand.h"
 #include "cutters/Error.h"
 
 #include <CLI/CLI.hpp>
@@ -23,6 +24,7 @@ int main(int argc, char** argv) {
   std::function<int()> run;
   engage::app::addAnalyzeCommand(app, run);
   engage::app::addMovesCommand(app, run);
+  engage::app::addSimulateCommand(app, run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -6,6 +6,7 @@
 // there).
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Core/System/omstream.hh>
 
 #include <filesystem>
 #include <map>
@@ -53,6 +54,8 @@ std::size_t boundaryEdgeCount(const TriangleMesh& mesh) {
 }
 
 void writeStl(const TriangleMesh& m, const std::string& path) {
+  omlog().disable();  // OpenMesh's writers report to the terminal; a library stays silent
+  omout().disable();
   Mesh mesh;
   std::vector<Mesh::VertexHandle> vh;
   vh.reserve(m.points.size());

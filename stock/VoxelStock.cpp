@@ -78,6 +78,7 @@ void checkMemory(const Box3& box, double h) {
 /// Per-leaf result of a removal, combined in leaf order.
 struct LeafResult {
   double volume = 0.0;
+  double lateralMoment = 0.0;
   double zMin = 1e300, zMax = -1e300;
   double sMin = 1e300, sMax = -1e300;
   long changed = 0;
@@ -280,7 +281,7 @@ void VoxelStock::captureRemoved(bool on) {
   }
 }
 
-Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double mrrValue) {
+Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) {
   Impl& s = *impl_;
   const double h = s.h;
   const Box3 wb = sweep.bounds();
@@ -349,13 +350,17 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double mrrValue) {
       it.setValue(std::max(after, 0.0f));
       if (after <= 0.0f) it.setValueOff();  // air: skipped from now on
       if (s.capture) r.lost.emplace_back(ijk, before - std::max(after, 0.0f));
-      // Engagement geometry relative to the tip at the step's end.
+      // Engagement geometry relative to the tip at the step's end. A voxel stands for
+      // material up to (lost fraction - 1/2) h beyond its centre, which places a boundary
+      // crossing it at the right sub-voxel height (exactly for axis-aligned boundaries).
       const Eigen::Vector3d rel = p - end;
-      r.zMin = std::min(r.zMin, rel.z());
-      r.zMax = std::max(r.zMax, rel.z());
+      const double reach = (lost - 0.5) * h;
+      r.zMin = std::min(r.zMin, rel.z() - reach);
+      r.zMax = std::max(r.zMax, rel.z() + reach);
       const double side = rel.head<2>().dot(n);
-      r.sMin = std::min(r.sMin, side);
-      r.sMax = std::max(r.sMax, side);
+      r.lateralMoment += lost * voxelVolume * side;
+      r.sMin = std::min(r.sMin, side - reach);
+      r.sMax = std::max(r.sMax, side + reach);
     }
   };
   if (leaves.size() >= 8)
@@ -368,6 +373,7 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double mrrValue) {
   double zMin = 1e300, zMax = -1e300, sMin = 1e300, sMax = -1e300;
   for (const LeafResult& r : results) {
     out.volume += r.volume;
+    out.lateral += r.lateralMoment;
     out.voxelsChanged += r.changed;
     out.voxelsVisited += r.visited;
     zMin = std::min(zMin, r.zMin);
@@ -376,8 +382,9 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double mrrValue) {
     sMax = std::max(sMax, r.sMax);
   }
   if (out.voxelsChanged > 0) {
-    out.axialDepth = std::min(zMax - std::max(zMin, -0.5 * h) + h, cutter.height());
-    out.radialWidth = sMax - sMin + h;
+    out.lateral /= out.volume;
+    out.axialDepth = std::min(zMax - std::max(zMin, 0.0), cutter.height());
+    out.radialWidth = sMax - sMin;
     // Engagement angle: the part of the periphery, at mid depth, with material just outside
     // the cutter after the cut (the arc of the edge that is cutting).
     const double zMid = std::clamp(0.5 * out.axialDepth, 0.0, cutter.height());
@@ -397,6 +404,7 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double mrrValue) {
 
   if (s.capture && out.voxelsChanged > 0) {
     // The capture grids allocate leaves: fill them serially, in leaf order.
+    const double mrrValue = dtSeconds > 0.0 ? out.volume / (dtSeconds / 60.0) : 0.0;
     auto racc = s.removed->getAccessor();
     auto sacc = s.step->getAccessor();
     auto macc = s.mrr->getAccessor();

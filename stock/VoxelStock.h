@@ -30,6 +30,9 @@ struct Removal {
   double axialDepth = 0.0;     ///< extent of the removed material along the tool axis, mm
   double radialWidth = 0.0;    ///< extent across the feed direction (at the step end), mm
   double engagementRad = 0.0;  ///< angle of the cutter's periphery in contact, rad
+  /// Volume-weighted mean offset of the removed material across the feed direction, mm:
+  /// + on the left of the direction of travel (seen from +Z). Tells which side the stock is.
+  double lateral = 0.0;
   long voxelsChanged = 0;      ///< voxels whose fraction dropped
   long voxelsVisited = 0;      ///< voxels whose distance was evaluated
 };
@@ -64,9 +67,9 @@ class VoxelStock {
   /// step that removed material from it, and that step's MRR (for removed.vdb).
   void captureRemoved(bool on);
 
-  /// Remove one step's swept solid. `step` and `mrr` (mm^3/min) are stored in the capture
-  /// grids when capture is on.
-  Removal remove(const Sweep& sweep, int step = 0, double mrr = 0.0);
+  /// Remove one step's swept solid. With capture on, `step` and the step's MRR (removed
+  /// volume over `dtSeconds`, mm^3/min; 0 when dtSeconds is 0) go to the capture grids.
+  Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0);
 
   /// Write stock.vdb: grid "stock" (material fraction). Written to a temporary name and
   /// renamed when complete. Throws Error on I/O failure.

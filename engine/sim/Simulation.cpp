@@ -1,0 +1,166 @@
+#include "engine/sim/Simulation.h"
+
+#include "cutters/Error.h"
+#include "cutters/Sweep.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace engage {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// Steps whose MRR differs from both neighbours' by less than this are steady state.
+constexpr double kSteadyChange = 0.02;
+/// Steps removing less than this fraction of a voxel per step are air cuts.
+constexpr double kAirVoxels = 0.01;
+
+/// The tip path of move m between fractions t0 and t1.
+StepPath stepPath(const Move& m, double t0, double t1) {
+  StepPath p;
+  p.start = pointAt(m, t0);
+  p.end = pointAt(m, t1);
+  if (m.kind == MoveKind::Arc && m.plane == Plane::XY) {
+    p.kind = StepPath::Kind::ArcXY;
+    p.center = m.center;
+    p.sweepRad = arcSweep(m) * (t1 - t0);
+  } else if (m.kind == MoveKind::Arc || m.kind == MoveKind::Spline) {
+    p.kind = StepPath::Kind::Polyline;
+    constexpr int kPieces = 8;
+    for (int i = 0; i <= kPieces; ++i) p.points.push_back(pointAt(m, t0 + (t1 - t0) * i / kPieces));
+  }
+  return p;
+}
+
+/// Signed curvature of the tool-centre path in XY, 1/mm (+ counter-clockwise).
+double curvatureOf(const Move& m) {
+  if (m.kind != MoveKind::Arc || m.plane != Plane::XY) return 0.0;
+  const double r = arcRadius(m);
+  return r > 0.0 ? (m.turns > 0 ? 1.0 : -1.0) / r : 0.0;
+}
+
+void accumulate(Agreement& a, double measured, double analytic) {
+  if (!(std::isfinite(analytic) && analytic > 0.0)) return;
+  const double rel = std::abs(measured / analytic - 1.0);
+  a.meanRelative += rel;
+  a.maxRelative = std::max(a.maxRelative, rel);
+  ++a.steps;
+}
+
+void finish(Agreement& a) {
+  if (a.steps > 0) a.meanRelative /= static_cast<double>(a.steps);
+}
+
+}  // namespace
+
+SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelStock& stock,
+                          const SimulationOptions& options) {
+  const double h = stock.voxelSize();
+  const double L = options.stepLength > 0.0 ? options.stepLength : 2.5 * h;
+  SimulationResult out;
+  out.volumeBefore = stock.volume();
+
+  // Plan the steps first (for progress and for the records).
+  struct Planned {
+    std::size_t move;
+    double t0, t1;
+  };
+  std::vector<Planned> plan;
+  for (std::size_t i = 0; i < path.moves.size(); ++i) {
+    const double len = moveLength(path.moves[i]);
+    if (len <= 0.0) continue;
+    const int n = std::max(1, static_cast<int>(std::ceil(len / L - 1e-9)));
+    for (int k = 0; k < n; ++k)
+      plan.push_back({i, static_cast<double>(k) / n, static_cast<double>(k + 1) / n});
+  }
+
+  const auto start = std::chrono::steady_clock::now();
+  double arc = 0.0;
+  out.steps.reserve(plan.size());
+  for (std::size_t si = 0; si < plan.size(); ++si) {
+    const Planned& p = plan[si];
+    const Move& m = path.moves[p.move];
+    const StepPath sp = stepPath(m, p.t0, p.t1);
+    StepRecord r;
+    r.move = p.move;
+    r.line = m.line;
+    r.kind = m.kind;
+    r.length = moveLength(m) * (p.t1 - p.t0);
+    arc += r.length;
+    r.arcLength = arc;
+    r.end = sp.end;
+    r.feed = m.kind == MoveKind::Rapid ? 0.0 : m.feed;
+    r.dt = r.feed > 0.0 ? r.length / r.feed * 60.0 : 0.0;
+    const Removal rem = stock.remove(Sweep(cutter, sp, h), static_cast<int>(si), r.dt);
+    r.removed = rem.volume;
+    r.voxelsChanged = rem.voxelsChanged;
+    r.width = rem.radialWidth;
+    r.depth = rem.axialDepth;
+    r.engagementRad = rem.engagementRad;
+    r.mrr = r.dt > 0.0 ? r.removed / (r.dt / 60.0) : 0.0;
+    r.curvature = curvatureOf(m);
+    out.removed += r.removed;
+    out.voxelsChanged += r.voxelsChanged;
+    if (m.kind == MoveKind::Rapid) out.rapidRemoved += r.removed;
+    out.cuttingTime += r.dt;
+
+    // Side of the curve the stock is on: concave when it lies on the outer side.
+    if (r.curvature != 0.0 && r.removed > kAirVoxels * h * h * h)
+      r.side = r.curvature * rem.lateral < 0.0 ? PathSide::Concave : PathSide::Convex;
+
+    // The analytic model of this step: its stepover and depth (given or measured).
+    r.mrrExact = r.mrrPaper = 0.0;
+    if (m.kind != MoveKind::Rapid && r.removed > kAirVoxels * h * h * h) {
+      const double s = options.stepover.value_or(std::min(r.width, 2.0 * cutter.maxRadius()));
+      const double d = std::min(options.depth.value_or(r.depth), cutter.height());
+      try {
+        const EngagementModel model(cutter, s, d);
+        PathShape shape;
+        if (r.side != PathSide::Straight) shape = PathShape{r.side, 1.0 / std::abs(r.curvature)};
+        r.mrrExact = model.mrr(r.feed, shape);
+        r.mrrPaper = model.mrrPaper(r.feed, shape);
+      } catch (const ParameterError&) {
+        r.mrrExact = r.mrrPaper = kNaN;  // no steady state (arc tighter than the cutter, ...)
+      }
+    }
+    out.steps.push_back(r);
+    if (options.progress && (si % 256 == 0 || si + 1 == plan.size())) options.progress(si + 1, plan.size());
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.volumeAfter = stock.volume();
+
+  // Agreement on steady-state steps: cutting, and within 2 % of both neighbours on the move.
+  for (std::size_t i = 1; i + 1 < out.steps.size(); ++i) {
+    const StepRecord& a = out.steps[i - 1];
+    const StepRecord& r = out.steps[i];
+    const StepRecord& b = out.steps[i + 1];
+    if (r.kind == MoveKind::Rapid || r.mrr <= 0.0 || a.move != r.move || b.move != r.move) continue;
+    if (std::abs(a.mrr / r.mrr - 1.0) > kSteadyChange || std::abs(b.mrr / r.mrr - 1.0) > kSteadyChange)
+      continue;
+    Agreement& exact = r.side == PathSide::Concave ? out.concave : r.side == PathSide::Convex ? out.convex : out.straight;
+    Agreement& paper = r.side == PathSide::Concave ? out.concavePaper
+                       : r.side == PathSide::Convex ? out.convexPaper
+                                                    : out.straightPaper;
+    accumulate(exact, r.mrr, r.mrrExact);
+    accumulate(paper, r.mrr, r.mrrPaper);
+  }
+  for (Agreement* a : {&out.straight, &out.concave, &out.convex, &out.straightPaper,
+                       &out.concavePaper, &out.convexPaper})
+    finish(*a);
+
+  // Where measurement and the exact model differ most, over all cutting steps.
+  for (std::size_t i = 0; i < out.steps.size(); ++i) {
+    const StepRecord& r = out.steps[i];
+    if (r.kind == MoveKind::Rapid || r.mrr <= 0.0 || !(std::isfinite(r.mrrExact) && r.mrrExact > 0.0)) continue;
+    out.largest.push_back({i, r.line, r.mrr, r.mrrExact, r.mrr / r.mrrExact - 1.0});
+  }
+  std::sort(out.largest.begin(), out.largest.end(), [](const Difference& x, const Difference& y) {
+    return std::abs(x.relative) != std::abs(y.relative) ? std::abs(x.relative) > std::abs(y.relative) : x.step < y.step;
+  });
+  if (out.largest.size() > 10) out.largest.resize(10);
+  return out;
+}
+
+}  // namespace engage

@@ -1,0 +1,87 @@
+#pragma once
+/// \file Simulation.h
+/// The simulation loop: a tool path cut into steps (no longer than L; arcs as arc pieces),
+/// each step's swept cutter removed from the stock, and per step the measured removal and
+/// engagement beside the analytic model of the same step (paper form and exact form).
+
+#include "cutters/AptCutter.h"
+#include "engine/gcode/Toolpath.h"
+#include "engine/model/EngagementModel.h"
+#include "stock/VoxelStock.h"
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace engage {
+
+/// Settings of one simulation.
+struct SimulationOptions {
+  /// Step length L, mm (0: 2.5 voxels).
+  double stepLength = 0.0;
+  /// Stepover and depth for the analytic model; unset: the step's measured width and depth.
+  std::optional<double> stepover;
+  std::optional<double> depth;
+  /// Called now and then with (steps done, steps in all).
+  std::function<void(std::size_t, std::size_t)> progress;
+};
+
+/// One step's record. Lengths mm, feeds mm/min, volumes mm^3, rates mm^3/min, times s.
+struct StepRecord {
+  std::size_t move = 0;  ///< index of the move in the tool path
+  int line = 0;          ///< source line
+  MoveKind kind = MoveKind::Line;
+  double arcLength = 0.0;  ///< cumulative path length at the step's end
+  double length = 0.0;     ///< step length
+  Eigen::Vector3d end{0.0, 0.0, 0.0};
+  double feed = 0.0;  ///< programmed feed (0 for rapids)
+  double dt = 0.0;    ///< length / feed (0 for rapids)
+  double removed = 0.0;
+  double mrr = 0.0;  ///< removed / dt (0 for rapids)
+  double width = 0.0;
+  double depth = 0.0;
+  double engagementRad = 0.0;
+  double curvature = 0.0;  ///< signed, 1/mm: + turning left (counter-clockwise seen from +Z)
+  PathSide side = PathSide::Straight;
+  double mrrExact = 0.0;  ///< analytic, exact form; NaN where the model has no steady state
+  double mrrPaper = 0.0;  ///< analytic, the paper's Eq 6/15/16
+  long voxelsChanged = 0;
+};
+
+/// Measured against analytic on one class of steady-state steps.
+struct Agreement {
+  std::size_t steps = 0;
+  double meanRelative = 0.0;  ///< mean of |measured / analytic - 1|
+  double maxRelative = 0.0;
+};
+
+/// A place where measurement and model differ.
+struct Difference {
+  std::size_t step = 0;
+  int line = 0;
+  double measured = 0.0;
+  double analytic = 0.0;
+  double relative = 0.0;  ///< measured / analytic - 1
+};
+
+/// The whole run.
+struct SimulationResult {
+  std::vector<StepRecord> steps;
+  double volumeBefore = 0.0;
+  double volumeAfter = 0.0;
+  double removed = 0.0;
+  double seconds = 0.0;        ///< wall time of the removal loop
+  double cuttingTime = 0.0;    ///< sum of dt over feed moves, s (no acceleration)
+  long voxelsChanged = 0;
+  double rapidRemoved = 0.0;   ///< material hit by rapids, mm^3 (a crash in real life)
+  Agreement straight, concave, convex;          ///< exact form
+  Agreement straightPaper, concavePaper, convexPaper;
+  std::vector<Difference> largest;  ///< the steady-state steps that differ most (exact form)
+};
+
+/// Run a tool path through a stock. Throws Error from the model or the stock.
+SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelStock& stock,
+                          const SimulationOptions& options);
+
+}  // namespace engage
