@@ -40,13 +40,15 @@ double distanceToSegment(const ProfileSegment& s, const Eigen::Vector2d& q) {
     const double t = len2 > 0.0 ? std::clamp((q - s.start).dot(d) / len2, 0.0, 1.0) : 0.0;
     return (s.start + t * d - q).norm();
   }
-  // Arc: counter-clockwise from start to end; all profile arcs lie within [-90, 90] deg of
-  // the centre, so plain atan2 angles need no wrap-around.
+  // Arc: counter-clockwise from start to end, spanning at most 180 deg (profile arcs lie
+  // within [-90, 90] deg of the centre), so q is within its angular range when it is left
+  // of the start radius and right of the end radius (no trigonometry: this is the hot path).
   const Eigen::Vector2d v = q - s.center;
-  const double a = std::atan2(v.y(), v.x());
-  const double a0 = std::atan2(s.start.y() - s.center.y(), s.start.x() - s.center.x());
-  const double a1 = std::atan2(s.end.y() - s.center.y(), s.end.x() - s.center.x());
-  if (a >= a0 && a <= a1) return std::abs(v.norm() - s.radius);
+  const Eigen::Vector2d a = s.start - s.center;
+  const Eigen::Vector2d b = s.end - s.center;
+  const double crossStart = a.x() * v.y() - a.y() * v.x();
+  const double crossEnd = v.x() * b.y() - v.y() * b.x();
+  if (crossStart >= 0.0 && crossEnd >= 0.0) return std::abs(v.norm() - s.radius);
   return std::min((q - s.start).norm(), (q - s.end).norm());
 }
 
@@ -295,7 +297,7 @@ double AptCutter::profileSignedDistance(double rho, double z) const {
 }
 
 double AptCutter::signedDistance(const Eigen::Vector3d& point) const {
-  return profileSignedDistance(std::hypot(point.x(), point.y()), point.z());
+  return profileSignedDistance(std::sqrt(point.x() * point.x() + point.y() * point.y()), point.z());
 }
 
 Box3 AptCutter::bounds() const {

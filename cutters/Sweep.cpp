@@ -92,6 +92,19 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
     flatHeight = false;  // polylines always sample (arcs in other planes, splines)
   }
   flat_ = flatHeight;
+  band_ = resolution;  // beyond one voxel from the surface only the sign matters
+  vertical_ = path_.kind == StepPath::Kind::Line &&
+              (path_.end.head<2>() - path_.start.head<2>()).norm() <= tol::kLengthMm;
+  resolution_ = resolution;
+  zLow_ = std::min(path_.start.z(), path_.end.z());
+  zHigh_ = std::max(path_.start.z(), path_.end.z()) + cutter_.height();
+  for (const Eigen::Vector3d& q : path_.points) {
+    zLow_ = std::min(zLow_, q.z());
+    zHigh_ = std::max(zHigh_, q.z() + cutter_.height());
+  }
+  // APT cutters are convex unless their sides lean inward (beta < 0).
+  convexLine_ =
+      !flat_ && path_.kind == StepPath::Kind::Line && cutter_.parameters().taperAngleRad >= 0.0;
   Eigen::Vector3d lo = extremes.front();
   Eigen::Vector3d hi = extremes.front();
   for (const Eigen::Vector3d& e : extremes) {
@@ -101,8 +114,8 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
   const double w = cutter_.maxRadius();
   bounds_.min = lo - Eigen::Vector3d(w, w, 0.0);
   bounds_.max = hi + Eigen::Vector3d(w, w, cutter_.height());
-  if (!flat_) {
-    const double spacing = resolution / 4.0;
+  if (!flat_ && !convexLine_) {
+    const double spacing = resolution / 2.0;
     const int n = std::max(2, static_cast<int>(std::ceil(length / spacing)) + 1);
     samples_.resize(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i)
@@ -114,8 +127,59 @@ double Sweep::endDistance(const Eigen::Vector3d& p) const {
   return cutter_.signedDistance(p - path_.end);
 }
 
-double Sweep::signedDistance(const Eigen::Vector3d& p) const {
-  if (!flat_) return sampled(p);
+double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const {
+  const double e = resolution_ / 8.0;
+  if (flat_) {
+    const double d = flatDistance(p);
+    if (gradient)
+      *gradient = Eigen::Vector3d(flatDistance(p + Eigen::Vector3d(e, 0, 0)) -
+                                      flatDistance(p - Eigen::Vector3d(e, 0, 0)),
+                                  flatDistance(p + Eigen::Vector3d(0, e, 0)) -
+                                      flatDistance(p - Eigen::Vector3d(0, e, 0)),
+                                  flatDistance(p + Eigen::Vector3d(0, 0, e)) -
+                                      flatDistance(p - Eigen::Vector3d(0, 0, e))) /
+                  (2.0 * e);
+    return d;
+  }
+  // Cheap answers first; the search is needed only near the swept surface. A point deeper
+  // than `band_` inside the tool at the step's end is inside the swept solid (the union's
+  // distance is at most that); a point further than `band_` from the bounding capsule is
+  // outside, and the capsule distance is a lower bound of the union's.
+  const double atEnd = cutter_.signedDistance(p - path_.end);
+  if (atEnd < -band_) return atEnd;
+  const double below = zLow_ - p.z();
+  const double above = p.z() - zHigh_;
+  const double across =
+      (path_.kind == StepPath::Kind::Line
+           ? distanceToSegment2d(p.head<2>(), path_.start.head<2>(), path_.end.head<2>())
+           : band_) -
+      cutter_.maxRadius();
+  const double bound = std::max({below, above, across});
+  if (bound > band_) return bound;
+  double best = 1.0;
+  const double d = sampled(p, best);
+  if (gradient && vertical_) {
+    // A plunge or a retract reaches its minimum over a whole range of tip heights beside the
+    // tool; the cutter's gradient at one of them may be its corner's. Differentiate the
+    // swept distance itself instead.
+    auto f = [&](const Eigen::Vector3d& o) {
+      double unused = 0.0;
+      return sampled(p + o, unused);
+    };
+    *gradient = Eigen::Vector3d(f({e, 0, 0}) - f({-e, 0, 0}), f({0, e, 0}) - f({0, -e, 0}),
+                                f({0, 0, e}) - f({0, 0, -e})) /
+                (2.0 * e);
+  } else if (gradient) {
+    const Eigen::Vector3d q = p - path_.at(best);
+    auto f = [&](const Eigen::Vector3d& o) { return cutter_.signedDistance(q + o); };
+    *gradient = Eigen::Vector3d(f({e, 0, 0}) - f({-e, 0, 0}), f({0, e, 0}) - f({0, -e, 0}),
+                                f({0, 0, e}) - f({0, 0, -e})) /
+                (2.0 * e);
+  }
+  return d;
+}
+
+double Sweep::flatDistance(const Eigen::Vector3d& p) const {
   const Eigen::Vector2d q(p.x(), p.y());
   double rho = 0.0;
   if (path_.kind == StepPath::Kind::Line) {
@@ -134,8 +198,49 @@ double Sweep::signedDistance(const Eigen::Vector3d& p) const {
   return cutter_.profileSignedDistance(rho, p.z() - path_.start.z());
 }
 
-double Sweep::sampled(const Eigen::Vector3d& p) const {
+double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter) const {
   auto f = [&](double u) { return cutter_.signedDistance(p - path_.at(u)); };
+  if (convexLine_) {
+    // The signed distance of a convex solid is convex, and so is its composition with the
+    // straight motion: golden-section search finds the minimum without sampling. Ten
+    // iterations leave 0.8 % of the step: a few micrometres of tip position, and the
+    // distance is flat at its minimum.
+    constexpr double kGolden = 0.6180339887498949;
+    double a = 0.0, b = 1.0;
+    double x1 = b - kGolden * (b - a), x2 = a + kGolden * (b - a);
+    double f1 = f(x1), f2 = f(x2);
+    for (int it = 0; it < 10; ++it) {
+      if (f1 < f2) {
+        b = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = b - kGolden * (b - a);
+        f1 = f(x1);
+      } else {
+        a = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = a + kGolden * (b - a);
+        f2 = f(x2);
+      }
+    }
+    const double f0 = f(0.0), fEnd = f(1.0);
+    double bestValue = f1;
+    bestParameter = x1;
+    if (f2 < bestValue) {
+      bestValue = f2;
+      bestParameter = x2;
+    }
+    if (f0 < bestValue) {
+      bestValue = f0;
+      bestParameter = 0.0;
+    }
+    if (fEnd < bestValue) {
+      bestValue = fEnd;
+      bestParameter = 1.0;
+    }
+    return bestValue;
+  }
   std::size_t best = 0;
   double bestValue = f(samples_[0]);
   for (std::size_t i = 1; i < samples_.size(); ++i) {
@@ -168,7 +273,16 @@ double Sweep::sampled(const Eigen::Vector3d& p) const {
       f2 = f(x2);
     }
   }
-  return std::min({bestValue, f1, f2});
+  bestParameter = samples_[best];
+  if (f1 < bestValue) {
+    bestValue = f1;
+    bestParameter = x1;
+  }
+  if (f2 < bestValue) {
+    bestValue = f2;
+    bestParameter = x2;
+  }
+  return bestValue;
 }
 
 }  // namespace engage

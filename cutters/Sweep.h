@@ -6,11 +6,12 @@
 /// Exact where the geometry allows a closed form: a step that keeps its height (a horizontal
 /// line or an XY arc) sweeps the profile along the step's XY path, and since every horizontal
 /// slice of the cutter is a disk on its axis, the distance is the profile's 2D distance at
-/// the XY distance from the path. Steps that change height (plunges, ramps, helices, arcs in
-/// the XZ/YZ planes) take the minimum of the cutter's distance over the tip positions along
-/// the step: sampled every quarter of `resolution`, then refined by golden-section search
-/// around the best sample (exact for the union outside the solid; inside it is the depth
-/// below the nearest instance, which is what a volume-fraction update needs near the surface).
+/// the XY distance from the path. Steps that change height take the minimum of the cutter's
+/// distance over the tip positions along the step: for straight steps of convex cutters by
+/// golden-section search (the distance is convex along the motion), otherwise (helices,
+/// arcs in the XZ/YZ planes, inward-leaning sides) sampled every half `resolution` and
+/// refined around the best sample. This is exact outside the solid; inside it is the depth
+/// below the nearest instance, a little shallower than the swept surface's.
 
 #include "cutters/AptCutter.h"
 
@@ -44,8 +45,12 @@ class Sweep {
   /// `resolution` (mm, e.g. the voxel size) sets the sampling of steps that change height.
   Sweep(const AptCutter& cutter, const StepPath& path, double resolution);
 
-  /// Signed distance from a world point to the swept solid, mm (negative inside).
-  double signedDistance(const Eigen::Vector3d& p) const;
+  /// Signed distance from a world point to the swept solid, mm (negative inside). With
+  /// `gradient`, also its gradient there (unit length up to round-off): the cutter's at the
+  /// closest tip position (envelope theorem), from central differences of step resolution/8.
+  /// Far from the surface (beyond `resolution`) the value may be a bound of the right sign
+  /// and the gradient is not set.
+  double signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient = nullptr) const;
   /// Signed distance from a world point to the cutter at the step's end, mm.
   double endDistance(const Eigen::Vector3d& p) const;
   /// World bounding box of the swept solid, mm.
@@ -54,11 +59,20 @@ class Sweep {
   const AptCutter& cutter() const { return cutter_; }
 
  private:
-  double sampled(const Eigen::Vector3d& p) const;
+  /// Minimum over the step of the cutter's distance; the minimising parameter in `best`.
+  double sampled(const Eigen::Vector3d& p, double& best) const;
+  /// Closed-form distance of a step that keeps its height.
+  double flatDistance(const Eigen::Vector3d& p) const;
 
   AptCutter cutter_;
   StepPath path_;
   bool flat_ = false;            ///< the step keeps its height: closed form
+  bool convexLine_ = false;      ///< a straight step of a convex cutter: golden-section search
+  bool vertical_ = false;        ///< a plunge or retract (no horizontal motion)
+  double band_ = 0.0;            ///< distances beyond this only need their sign, mm
+  double resolution_ = 0.0;      ///< mm
+  double zLow_ = 0.0;            ///< lowest tip height over the step, mm
+  double zHigh_ = 0.0;           ///< highest point of the cutter over the step, mm
   std::vector<double> samples_;  ///< sample parameters for steps that change height
   Box3 bounds_;
 };

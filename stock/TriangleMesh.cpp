@@ -8,9 +8,10 @@
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 
+#include <algorithm>
 #include <filesystem>
-#include <map>
 #include <utility>
+#include <vector>
 
 namespace engage {
 namespace {
@@ -39,17 +40,24 @@ TriangleMesh readMesh(const std::string& path) {
 }
 
 std::size_t boundaryEdgeCount(const TriangleMesh& mesh) {
-  // Count undirected edges by use; a closed (watertight) mesh uses each exactly twice.
-  std::map<std::pair<unsigned, unsigned>, int> uses;
+  // Sort the undirected edges; a closed (watertight) mesh uses each one exactly twice.
+  std::vector<std::pair<unsigned, unsigned>> edges;
+  edges.reserve(mesh.triangles.size() * 3);
   for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const unsigned a = t[static_cast<std::size_t>(k)];
-      const unsigned b = t[static_cast<std::size_t>((k + 1) % 3)];
-      ++uses[{std::min(a, b), std::max(a, b)}];
+    for (std::size_t k = 0; k < 3; ++k) {
+      const unsigned a = t[k];
+      const unsigned b = t[(k + 1) % 3];
+      edges.emplace_back(std::min(a, b), std::max(a, b));
     }
+  std::sort(edges.begin(), edges.end());
   std::size_t open = 0;
-  for (const auto& [edge, n] : uses)
-    if (n == 1) ++open;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i])
+      ++j;
+    if (j - i == 1) ++open;
+    i = j;
+  }
   return open;
 }
 

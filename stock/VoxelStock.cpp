@@ -87,27 +87,27 @@ struct LeafResult {
 };
 
 /// Fraction of the voxel at p (size h) inside the swept solid. Away from the surface the
-/// voxel is all in or all out; a voxel the surface may cross (|d| < h sqrt(3)/2) is split
-/// into 2 x 2 x 2 sub-voxels, each taking 1/2 - d/(h/2) clamped to [0, 1]: the fraction a
-/// plane at distance d leaves of a slab. On a slot at 30 deg to the grid (D = 20 h, L = 2.5 h)
-/// this took the worst per-step error from 0.66 % (one sample) to below 0.5 %.
+/// voxel is all in or all out. A voxel the surface may cross (|d| < h sqrt(3)/2) is split
+/// into 2 x 2 x 2 sub-voxels, each taking 1/2 - d_i/(h/2) clamped to [0, 1], the fraction a
+/// plane at distance d_i leaves of a slab; d_i comes from the distance and its gradient at
+/// the centre (one search for the closest tip position instead of eight). On a slot at 30 deg to
+/// the grid (D = 20 h, L = 2.5 h) this took the worst per-step error from 0.66 % (one sample) to
+/// below 0.5 %; 3 x 3 x 3 and 4 x 4 x 4 sub-voxels gained nothing more.
 double cutFraction(const Sweep& sweep, const Eigen::Vector3d& p, double h) {
-  const double d = sweep.signedDistance(p);
+  Eigen::Vector3d g(0.0, 0.0, 0.0);
+  const double d = sweep.signedDistance(p, &g);
   constexpr double kHalfDiagonal = 0.8660254037844386;  // sqrt(3) / 2
   if (d >= kHalfDiagonal * h) return 0.0;
   if (d <= -kHalfDiagonal * h) return 1.0;
-  constexpr int kN = 2;  // 3 and 4 were measured: no gain on the per-step error
-  const double sub = h / kN;
+  const double q = h / 4.0;  // sub-voxel centres at +-h/4
   double sum = 0.0;
-  for (int i = 0; i < kN; ++i)
-    for (int j = 0; j < kN; ++j)
-      for (int k = 0; k < kN; ++k) {
-        const Eigen::Vector3d o((i + 0.5) * sub - 0.5 * h, (j + 0.5) * sub - 0.5 * h,
-                                (k + 0.5) * sub - 0.5 * h);
-        const double di = sweep.signedDistance(p + o);
-        sum += std::clamp(0.5 - di / sub, 0.0, 1.0);
+  for (int i = -1; i <= 1; i += 2)
+    for (int j = -1; j <= 1; j += 2)
+      for (int k = -1; k <= 1; k += 2) {
+        const double di = d + q * (i * g.x() + j * g.y() + k * g.z());
+        sum += std::clamp(0.5 - di / (2.0 * q), 0.0, 1.0);
       }
-  return sum / (kN * kN * kN);
+  return sum / 8.0;
 }
 
 }  // namespace

@@ -33,8 +33,8 @@ struct Removal {
   /// Volume-weighted mean offset of the removed material across the feed direction, mm:
   /// + on the left of the direction of travel (seen from +Z). Tells which side the stock is.
   double lateral = 0.0;
-  long voxelsChanged = 0;      ///< voxels whose fraction dropped
-  long voxelsVisited = 0;      ///< voxels whose distance was evaluated
+  long voxelsChanged = 0;  ///< voxels whose fraction dropped
+  long voxelsVisited = 0;  ///< voxels whose distance was evaluated
 };
 
 /// Sparse-voxel stock of volume fractions.

@@ -14,6 +14,8 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// Steps whose MRR differs from both neighbours' by less than this are steady state.
 constexpr double kSteadyChange = 0.02;
+/// Rapids removing less than this many voxels are rounding, not a collision.
+constexpr double kRapidNoiseVoxels = 0.5;
 /// Steps removing less than this fraction of a voxel per step are air cuts.
 constexpr double kAirVoxels = 0.01;
 
@@ -29,7 +31,8 @@ StepPath stepPath(const Move& m, double t0, double t1) {
   } else if (m.kind == MoveKind::Arc || m.kind == MoveKind::Spline) {
     p.kind = StepPath::Kind::Polyline;
     constexpr int kPieces = 8;
-    for (int i = 0; i <= kPieces; ++i) p.points.push_back(pointAt(m, t0 + (t1 - t0) * i / kPieces));
+    for (int i = 0; i <= kPieces; ++i)
+      p.points.push_back(pointAt(m, t0 + (t1 - t0) * i / kPieces));
   }
   return p;
 }
@@ -103,7 +106,10 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
     r.curvature = curvatureOf(m);
     out.removed += r.removed;
     out.voxelsChanged += r.voxelsChanged;
-    if (m.kind == MoveKind::Rapid) out.rapidRemoved += r.removed;
+    // A rapid that removes more than half a voxel hits material (a crash on a machine);
+    // below that it is the fraction scheme's rounding along walls it retraces.
+    if (m.kind == MoveKind::Rapid && r.removed > kRapidNoiseVoxels * h * h * h)
+      out.rapidRemoved += r.removed;
     out.cuttingTime += r.dt;
 
     // Side of the curve the stock is on: concave when it lies on the outer side.
@@ -126,7 +132,8 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
       }
     }
     out.steps.push_back(r);
-    if (options.progress && (si % 256 == 0 || si + 1 == plan.size())) options.progress(si + 1, plan.size());
+    if (options.progress && (si % 256 == 0 || si + 1 == plan.size()))
+      options.progress(si + 1, plan.size());
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   out.volumeAfter = stock.volume();
@@ -137,10 +144,13 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
     const StepRecord& r = out.steps[i];
     const StepRecord& b = out.steps[i + 1];
     if (r.kind == MoveKind::Rapid || r.mrr <= 0.0 || a.move != r.move || b.move != r.move) continue;
-    if (std::abs(a.mrr / r.mrr - 1.0) > kSteadyChange || std::abs(b.mrr / r.mrr - 1.0) > kSteadyChange)
+    if (std::abs(a.mrr / r.mrr - 1.0) > kSteadyChange ||
+        std::abs(b.mrr / r.mrr - 1.0) > kSteadyChange)
       continue;
-    Agreement& exact = r.side == PathSide::Concave ? out.concave : r.side == PathSide::Convex ? out.convex : out.straight;
-    Agreement& paper = r.side == PathSide::Concave ? out.concavePaper
+    Agreement& exact = r.side == PathSide::Concave  ? out.concave
+                       : r.side == PathSide::Convex ? out.convex
+                                                    : out.straight;
+    Agreement& paper = r.side == PathSide::Concave  ? out.concavePaper
                        : r.side == PathSide::Convex ? out.convexPaper
                                                     : out.straightPaper;
     accumulate(exact, r.mrr, r.mrrExact);
@@ -153,11 +163,15 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
   // Where measurement and the exact model differ most, over all cutting steps.
   for (std::size_t i = 0; i < out.steps.size(); ++i) {
     const StepRecord& r = out.steps[i];
-    if (r.kind == MoveKind::Rapid || r.mrr <= 0.0 || !(std::isfinite(r.mrrExact) && r.mrrExact > 0.0)) continue;
+    if (r.kind == MoveKind::Rapid || r.mrr <= 0.0 ||
+        !(std::isfinite(r.mrrExact) && r.mrrExact > 0.0))
+      continue;
     out.largest.push_back({i, r.line, r.mrr, r.mrrExact, r.mrr / r.mrrExact - 1.0});
   }
   std::sort(out.largest.begin(), out.largest.end(), [](const Difference& x, const Difference& y) {
-    return std::abs(x.relative) != std::abs(y.relative) ? std::abs(x.relative) > std::abs(y.relative) : x.step < y.step;
+    return std::abs(x.relative) != std::abs(y.relative)
+               ? std::abs(x.relative) > std::abs(y.relative)
+               : x.step < y.step;
   });
   if (out.largest.size() > 10) out.largest.resize(10);
   return out;

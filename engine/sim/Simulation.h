@@ -71,11 +71,12 @@ struct SimulationResult {
   double volumeBefore = 0.0;
   double volumeAfter = 0.0;
   double removed = 0.0;
-  double seconds = 0.0;        ///< wall time of the removal loop
-  double cuttingTime = 0.0;    ///< sum of dt over feed moves, s (no acceleration)
+  double seconds = 0.0;      ///< wall time of the removal loop
+  double cuttingTime = 0.0;  ///< sum of dt over feed moves, s (no acceleration)
   long voxelsChanged = 0;
-  double rapidRemoved = 0.0;   ///< material hit by rapids, mm^3 (a crash in real life)
-  Agreement straight, concave, convex;          ///< exact form
+  double rapidRemoved = 0.0;            ///< material hit by rapids, mm^3 (a crash in real life);
+                                        ///< steps below half a voxel are not counted (rounding)
+  Agreement straight, concave, convex;  ///< exact form
   Agreement straightPaper, concavePaper, convexPaper;
   std::vector<Difference> largest;  ///< the steady-state steps that differ most (exact form)
 };

@@ -19,7 +19,8 @@ std::string slotProgram() {
   char buf[256];
   const double c = std::cos(kPi / 6), s = std::sin(kPi / 6);
   std::snprintf(buf, sizeof buf,
-                "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z-2 F100\nG1 X%.6f Y%.6f F600\nG0 Z5\nM2\n", 30 * c, 30 * s);
+                "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z-2 F100\nG1 X%.6f Y%.6f F600\nG0 Z5\nM2\n", 30 * c,
+                30 * s);
   return buf;
 }
 }  // namespace
@@ -65,13 +66,15 @@ TEST_CASE("arcs are cut as arc pieces; the stock side decides concave or convex"
   // A full circle of tool-centre radius 20 around a disc of stock of radius 18 (stepover 1
   // into it: convex), then around a hole of radius 22 in a block (concave).
   const AptCutter cutter = AptCutter::flat(6.0, 18.0);
-  const std::string prog = "G21 G90 G17\nG0 X20 Y0 Z5\nG1 Z-2 F300\nG3 X20 Y0 I-20 J0 F600\nG0 Z5\nM2\n";
+  const std::string prog =
+      "G21 G90 G17\nG0 X20 Y0 Z5\nG1 Z-2 F300\nG3 X20 Y0 I-20 J0 F600\nG0 Z5\nM2\n";
   const Toolpath path = readProgramText(prog, "circle.ngc");
   SimulationOptions o;
   o.stepover = 1.0;
   o.depth = 2.0;
   {
-    VoxelStock disc = VoxelStock::fromMesh(ENGAGE_SOURCE_DIR "/tests/data/cylinder_r18_h10.stl", 0.3);
+    VoxelStock disc =
+        VoxelStock::fromMesh(ENGAGE_SOURCE_DIR "/tests/data/cylinder_r18_h10.stl", 0.3);
     const SimulationResult r = simulate(path, cutter, disc, o);
     int convex = 0;
     for (const StepRecord& s : r.steps)
