@@ -121,7 +121,14 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
     if (m.kind != MoveKind::Rapid && r.removed > kAirVoxels * h * h * h) {
       const double s = options.stepover.value_or(std::min(r.width, 2.0 * cutter.maxRadius()));
       const double d = std::min(options.depth.value_or(r.depth), cutter.height());
-      try {
+      const Eigen::Vector3d travel = sp.end - sp.start;
+      if (travel.head<2>().norm() <= 1e-9 && m.kind == MoveKind::Line) {
+        // A plunge: the cross-section normal to the motion is the cutter's slice where it
+        // enters the material, pi W(depth)^2; the paper has no form for it.
+        const double w = cutter.radiusAt(d);
+        r.mrrExact = travel.z() < 0.0 ? 3.14159265358979323846 * w * w * r.feed : kNaN;
+        r.mrrPaper = kNaN;
+      } else try {
         const EngagementModel model(cutter, s, d);
         PathShape shape;
         if (r.side != PathSide::Straight) shape = PathShape{r.side, 1.0 / std::abs(r.curvature)};
