@@ -200,16 +200,22 @@ double Sweep::flatDistance(const Eigen::Vector3d& p) const {
 
 double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter) const {
   auto f = [&](double u) { return cutter_.signedDistance(p - path_.at(u)); };
-  if (convexLine_) {
-    // The signed distance of a convex solid is convex, and so is its composition with the
-    // straight motion: golden-section search finds the minimum without sampling. Ten
-    // iterations leave 0.8 % of the step: a few micrometres of tip position, and the
-    // distance is flat at its minimum.
+  // The best of the candidates (value, parameter) seen so far.
+  double bestValue = 0.0;
+  bool any = false;
+  auto consider = [&](double u, double v) {
+    if (!any || v < bestValue) {
+      bestValue = v;
+      bestParameter = u;
+      any = true;
+    }
+  };
+  // Golden-section search on [a, b], keeping its two final points as candidates.
+  auto golden = [&](double a, double b, int iterations) {
     constexpr double kGolden = 0.6180339887498949;
-    double a = 0.0, b = 1.0;
     double x1 = b - kGolden * (b - a), x2 = a + kGolden * (b - a);
     double f1 = f(x1), f2 = f(x2);
-    for (int it = 0; it < 10; ++it) {
+    for (int it = 0; it < iterations; ++it) {
       if (f1 < f2) {
         b = x2;
         x2 = x1;
@@ -224,64 +230,27 @@ double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter) const {
         f2 = f(x2);
       }
     }
-    const double f0 = f(0.0), fEnd = f(1.0);
-    double bestValue = f1;
-    bestParameter = x1;
-    if (f2 < bestValue) {
-      bestValue = f2;
-      bestParameter = x2;
-    }
-    if (f0 < bestValue) {
-      bestValue = f0;
-      bestParameter = 0.0;
-    }
-    if (fEnd < bestValue) {
-      bestValue = fEnd;
-      bestParameter = 1.0;
-    }
+    consider(x1, f1);
+    consider(x2, f2);
+  };
+  if (convexLine_) {
+    // The signed distance of a convex solid is convex, and so is its composition with the
+    // straight motion: golden-section search finds the minimum without sampling. Ten
+    // iterations leave 0.8 % of the step: a few micrometres of tip position, and the
+    // distance is flat at its minimum.
+    consider(0.0, f(0.0));
+    consider(1.0, f(1.0));
+    golden(0.0, 1.0, 10);
     return bestValue;
   }
   std::size_t best = 0;
-  double bestValue = f(samples_[0]);
-  for (std::size_t i = 1; i < samples_.size(); ++i) {
+  for (std::size_t i = 0; i < samples_.size(); ++i) {
     const double v = f(samples_[i]);
-    if (v < bestValue) {
-      bestValue = v;
-      best = i;
-    }
+    if (!any || v < bestValue) best = i;
+    consider(samples_[i], v);
   }
-  // Golden-section search on the bracket around the best sample.
-  double a = samples_[best > 0 ? best - 1 : 0];
-  double b = samples_[std::min(best + 1, samples_.size() - 1)];
-  constexpr double kGolden = 0.6180339887498949;
-  double x1 = b - kGolden * (b - a);
-  double x2 = a + kGolden * (b - a);
-  double f1 = f(x1);
-  double f2 = f(x2);
-  for (int it = 0; it < 12; ++it) {
-    if (f1 < f2) {
-      b = x2;
-      x2 = x1;
-      f2 = f1;
-      x1 = b - kGolden * (b - a);
-      f1 = f(x1);
-    } else {
-      a = x1;
-      x1 = x2;
-      f1 = f2;
-      x2 = a + kGolden * (b - a);
-      f2 = f(x2);
-    }
-  }
-  bestParameter = samples_[best];
-  if (f1 < bestValue) {
-    bestValue = f1;
-    bestParameter = x1;
-  }
-  if (f2 < bestValue) {
-    bestValue = f2;
-    bestParameter = x2;
-  }
+  // Refine on the bracket around the best sample.
+  golden(samples_[best > 0 ? best - 1 : 0], samples_[std::min(best + 1, samples_.size() - 1)], 12);
   return bestValue;
 }
 

@@ -1182,26 +1182,8 @@ class Interpreter final : public gcode::ParameterSource {
     }
   }
 
-  /// In-plane axes (a, b) and normal n of the active plane, as in Toolpath.cpp; and the
-  /// letters of the centre offsets for a and b.
-  struct PlaneAxes {
-    int a, b, n;
-    char ia, ib;
-  };
-  PlaneAxes planeAxes() const {
-    switch (plane_) {
-      case Plane::XY:
-        return {0, 1, 2, 'I', 'J'};
-      case Plane::XZ:
-        return {2, 0, 1, 'K', 'I'};
-      case Plane::YZ:
-        return {1, 2, 0, 'J', 'K'};
-    }
-    return {0, 1, 2, 'I', 'J'};
-  }
-
   void arc(const Words& w, int column) {
-    const PlaneAxes ax = planeAxes();
+    const PlaneAxes ax = planeAxes(plane_);
     const Vector3d end = target(w, false);
     const bool ccw = motion_ == 30;
     const double tol = (inch_ ? kArcToleranceInch : kArcToleranceMm) * unit();

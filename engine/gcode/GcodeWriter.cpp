@@ -86,23 +86,6 @@ std::string editLine(const std::string& text, const SourceBlock& block, const st
   return out;
 }
 
-/// In-plane axes (a, b), normal n, and centre letters, as in Toolpath.cpp.
-struct PlaneAxes {
-  int a, b, n;
-  char ia, ib;
-};
-PlaneAxes axesOf(Plane p) {
-  switch (p) {
-    case Plane::XY:
-      return {0, 1, 2, 'I', 'J'};
-    case Plane::XZ:
-      return {2, 0, 1, 'K', 'I'};
-    case Plane::YZ:
-      return {1, 2, 0, 'J', 'K'};
-  }
-  return {0, 1, 2, 'I', 'J'};
-}
-
 /// Writes pieces of one move as text, tracking the position as the program will read it
 /// back (rounded), so that incremental words and relative centres add up exactly.
 class PieceWriter {
@@ -117,7 +100,7 @@ class PieceWriter {
     const Eigen::Vector3d end = rounded(program(endMachine));
     std::string w;
     static const char kAxis[3] = {'X', 'Y', 'Z'};
-    const PlaneAxes ax = axesOf(m_.plane);
+    const PlaneAxes ax = planeAxes(m_.plane);
     for (int a = 0; a < 3; ++a) {
       const bool inPlane = m_.kind == MoveKind::Arc && (a == ax.a || a == ax.b);
       const double delta = end[a] - emitted_[a];

@@ -8,26 +8,19 @@ namespace {
 
 constexpr double kTwoPi = 6.28318530717958647692;
 
-/// Indices of the plane's first and second in-plane axes and of its normal, chosen so that
-/// (first, second, normal) is right-handed: XY (x, y, z), XZ (z, x, y), YZ (y, z, x).
-struct Axes {
-  int a;
-  int b;
-  int n;
-};
-Axes axesOf(Plane plane) {
+}  // namespace
+
+PlaneAxes planeAxes(Plane plane) {
   switch (plane) {
     case Plane::XY:
-      return {0, 1, 2};
+      return {0, 1, 2, 'I', 'J'};
     case Plane::XZ:
-      return {2, 0, 1};
+      return {2, 0, 1, 'K', 'I'};
     case Plane::YZ:
-      return {1, 2, 0};
+      return {1, 2, 0, 'J', 'K'};
   }
-  return {0, 1, 2};
+  return {0, 1, 2, 'I', 'J'};
 }
-
-}  // namespace
 
 const char* moveKindName(MoveKind kind) {
   switch (kind) {
@@ -56,12 +49,12 @@ const char* planeName(Plane plane) {
 }
 
 double arcRadius(const Move& arc) {
-  const Axes x = axesOf(arc.plane);
+  const PlaneAxes x = planeAxes(arc.plane);
   return std::hypot(arc.start[x.a] - arc.center[x.a], arc.start[x.b] - arc.center[x.b]);
 }
 
 double arcSweep(const Move& arc) {
-  const Axes x = axesOf(arc.plane);
+  const PlaneAxes x = planeAxes(arc.plane);
   const double a0 = std::atan2(arc.start[x.b] - arc.center[x.b], arc.start[x.a] - arc.center[x.a]);
   const double a1 = std::atan2(arc.end[x.b] - arc.center[x.b], arc.end[x.a] - arc.center[x.a]);
   const int turns = std::abs(arc.turns);
@@ -82,7 +75,7 @@ double arcSweep(const Move& arc) {
 double moveLength(const Move& move) {
   switch (move.kind) {
     case MoveKind::Arc: {
-      const Axes x = axesOf(move.plane);
+      const PlaneAxes x = planeAxes(move.plane);
       const double planar = arcRadius(move) * std::abs(arcSweep(move));
       return std::hypot(planar, move.end[x.n] - move.start[x.n]);
     }
@@ -106,7 +99,7 @@ Eigen::Vector3d pointAt(const Move& move, double t) {
   t = std::clamp(t, 0.0, 1.0);
   switch (move.kind) {
     case MoveKind::Arc: {
-      const Axes x = axesOf(move.plane);
+      const PlaneAxes x = planeAxes(move.plane);
       const double r = arcRadius(move);
       const double a0 =
           std::atan2(move.start[x.b] - move.center[x.b], move.start[x.a] - move.center[x.a]);

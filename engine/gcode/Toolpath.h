@@ -23,6 +23,15 @@ enum class Plane { XY, XZ, YZ };
 /// Feed mode the move was programmed in (G94, G93, G95).
 enum class FeedMode { UnitsPerMinute, InverseTime, UnitsPerRevolution };
 
+/// A plane's in-plane axes (a, b) and normal n, indices 0-2 for X-Z, such that (a, b, n) is
+/// right-handed, and the letters of the arc-centre words for a and b: XY (x, y, z; I, J),
+/// XZ (z, x, y; K, I), YZ (y, z, x; J, K).
+struct PlaneAxes {
+  int a, b, n;
+  char ia, ib;
+};
+PlaneAxes planeAxes(Plane plane);
+
 /// "rapid", "line", "arc", "spline".
 const char* moveKindName(MoveKind kind);
 /// "XY", "XZ", "YZ".
