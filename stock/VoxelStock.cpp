@@ -329,39 +329,44 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
     Leaf& leaf = *leaves[li];
     LeafResult& r = results[li];
     const bool allInside = centreDistance[li] < -(leafHalfDiagonal + 0.5 * h);
-    for (auto it = leaf.beginValueOn(); it; ++it) {
-      const float before = *it;
-      if (before <= 0.0f) continue;
-      const Coord ijk = it.getCoord();
-      const Eigen::Vector3d p(ijk.x() * h, ijk.y() * h, ijk.z() * h);
-      if (p.x() < wb.min.x() - h || p.y() < wb.min.y() - h || p.z() < wb.min.z() - h ||
-          p.x() > wb.max.x() + h || p.y() > wb.max.y() + h || p.z() > wb.max.z() + h)
-        continue;
-      double cut = 1.0;
-      if (!allInside) {
-        ++r.visited;
-        cut = cutFraction(sweep, p, h);
-      }
-      const float after = std::min(before, static_cast<float>(1.0 - cut));
-      if (!(after < before)) continue;
-      const double lost = static_cast<double>(before - after);
-      r.volume += lost * voxelVolume;
-      ++r.changed;
-      it.setValue(std::max(after, 0.0f));
-      if (after <= 0.0f) it.setValueOff();  // air: skipped from now on
-      if (s.capture) r.lost.emplace_back(ijk, before - std::max(after, 0.0f));
-      // Engagement geometry relative to the tip at the step's end. A voxel stands for
-      // material up to (lost fraction - 1/2) h beyond its centre, which places a boundary
-      // crossing it at the right sub-voxel height (exactly for axis-aligned boundaries).
-      const Eigen::Vector3d rel = p - end;
-      const double reach = (lost - 0.5) * h;
-      r.zMin = std::min(r.zMin, rel.z() - reach);
-      r.zMax = std::max(r.zMax, rel.z() + reach);
-      const double side = rel.head<2>().dot(n);
-      r.lateralMoment += lost * voxelVolume * side;
-      r.sMin = std::min(r.sMin, side - reach);
-      r.sMax = std::max(r.sMax, side + reach);
-    }
+    // Only the part of the leaf inside the step's (index) bounds can change.
+    const Coord o = leaf.origin();
+    const Coord from = Coord::maxComponent(o, lo);
+    const Coord to = Coord::minComponent(o + Coord(kLeafDim - 1), hi);
+    for (int ix = from.x(); ix <= to.x(); ++ix)
+      for (int iy = from.y(); iy <= to.y(); ++iy)
+        for (int iz = from.z(); iz <= to.z(); ++iz) {
+          const Coord ijk(ix, iy, iz);
+          const openvdb::Index offset = Leaf::coordToOffset(ijk);
+          if (!leaf.isValueOn(offset)) continue;  // air
+          const float before = leaf.getValue(offset);
+          if (before <= 0.0f) continue;
+          const Eigen::Vector3d p(ijk.x() * h, ijk.y() * h, ijk.z() * h);
+          double cut = 1.0;
+          if (!allInside) {
+            ++r.visited;
+            cut = cutFraction(sweep, p, h);
+          }
+          const float after = std::min(before, static_cast<float>(1.0 - cut));
+          if (!(after < before)) continue;
+          const double lost = static_cast<double>(before - after);
+          r.volume += lost * voxelVolume;
+          ++r.changed;
+          leaf.setValueOnly(offset, std::max(after, 0.0f));
+          if (after <= 0.0f) leaf.setValueOff(offset);  // air: skipped from now on
+          if (s.capture) r.lost.emplace_back(ijk, before - std::max(after, 0.0f));
+          // Engagement geometry relative to the tip at the step's end. A voxel stands for
+          // material up to (lost fraction - 1/2) h beyond its centre, which places a boundary
+          // crossing it at the right sub-voxel height (exactly for axis-aligned boundaries).
+          const Eigen::Vector3d rel = p - end;
+          const double reach = (lost - 0.5) * h;
+          r.zMin = std::min(r.zMin, rel.z() - reach);
+          r.zMax = std::max(r.zMax, rel.z() + reach);
+          const double side = rel.head<2>().dot(n);
+          r.lateralMoment += lost * voxelVolume * side;
+          r.sMin = std::min(r.sMin, side - reach);
+          r.sMax = std::max(r.sMax, side + reach);
+        }
   };
   if (leaves.size() >= 8)
     tbb::parallel_for(std::size_t(0), leaves.size(), work);

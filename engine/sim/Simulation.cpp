@@ -96,7 +96,11 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
     r.end = sp.end;
     r.feed = m.kind == MoveKind::Rapid ? 0.0 : m.feed;
     r.dt = r.feed > 0.0 ? r.length / r.feed * 60.0 : 0.0;
+    const auto stepStart = std::chrono::steady_clock::now();
     const Removal rem = stock.remove(Sweep(cutter, sp, h), static_cast<int>(si), r.dt);
+    if (options.timeSteps)
+      out.stepSeconds.push_back(
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - stepStart).count());
     r.removed = rem.volume;
     r.voxelsChanged = rem.voxelsChanged;
     r.width = rem.radialWidth;
@@ -128,15 +132,16 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
         const double w = cutter.radiusAt(d);
         r.mrrExact = travel.z() < 0.0 ? 3.14159265358979323846 * w * w * r.feed : kNaN;
         r.mrrPaper = kNaN;
-      } else try {
-        const EngagementModel model(cutter, s, d);
-        PathShape shape;
-        if (r.side != PathSide::Straight) shape = PathShape{r.side, 1.0 / std::abs(r.curvature)};
-        r.mrrExact = model.mrr(r.feed, shape);
-        r.mrrPaper = model.mrrPaper(r.feed, shape);
-      } catch (const ParameterError&) {
-        r.mrrExact = r.mrrPaper = kNaN;  // no steady state (arc tighter than the cutter, ...)
-      }
+      } else
+        try {
+          const EngagementModel model(cutter, s, d);
+          PathShape shape;
+          if (r.side != PathSide::Straight) shape = PathShape{r.side, 1.0 / std::abs(r.curvature)};
+          r.mrrExact = model.mrr(r.feed, shape);
+          r.mrrPaper = model.mrrPaper(r.feed, shape);
+        } catch (const ParameterError&) {
+          r.mrrExact = r.mrrPaper = kNaN;  // no steady state (arc tighter than the cutter, ...)
+        }
     }
     out.steps.push_back(r);
     if (options.progress && (si % 256 == 0 || si + 1 == plan.size()))

@@ -25,6 +25,9 @@ struct SimulationOptions {
   std::optional<double> depth;
   /// Called now and then with (steps done, steps in all).
   std::function<void(std::size_t, std::size_t)> progress;
+  /// Record each step's removal time in SimulationResult::stepSeconds (benchmarks; kept out
+  /// of the reports, which must not change from run to run).
+  bool timeSteps = false;
 };
 
 /// One step's record. Lengths mm, feeds mm/min, volumes mm^3, rates mm^3/min, times s.
@@ -79,6 +82,7 @@ struct SimulationResult {
   Agreement straight, concave, convex;  ///< exact form
   Agreement straightPaper, concavePaper, convexPaper;
   std::vector<Difference> largest;  ///< the steady-state steps that differ most (exact form)
+  std::vector<double> stepSeconds;  ///< per step, when SimulationOptions::timeSteps
 };
 
 /// Run a tool path through a stock. Throws Error from the model or the stock.

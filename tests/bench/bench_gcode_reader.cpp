@@ -22,7 +22,8 @@ int main(int argc, char** argv) {
     if (i % 7 == 0) {
       const double next = angle + 0.05;
       std::snprintf(buf, sizeof buf, "G3 X%.6f Y%.6f I%.6f J%.6f F%d\n", 10 * std::cos(next),
-                    10 * std::sin(next), -10 * std::cos(angle), -10 * std::sin(angle), 1000 + i % 50);
+                    10 * std::sin(next), -10 * std::cos(angle), -10 * std::sin(angle),
+                    1000 + i % 50);
       angle = next;
     } else {
       angle += 0.01;
@@ -41,8 +42,9 @@ int main(int argc, char** argv) {
     moves = path.moves.size();
   }
   std::sort(seconds.begin(), seconds.end());
-  std::printf("{\"lines\": %d, \"moves\": %zu, \"seconds_min\": %.4f, \"seconds_median\": %.4f, "
-              "\"lines_per_second\": %.0f}\n",
-              lines, moves, seconds.front(), seconds[2], lines / seconds[2]);
+  std::printf(
+      "{\"lines\": %d, \"moves\": %zu, \"seconds_min\": %.4f, \"seconds_median\": %.4f, "
+      "\"lines_per_second\": %.0f}\n",
+      lines, moves, seconds.front(), seconds[2], lines / seconds[2]);
   return 0;
 }

@@ -52,11 +52,13 @@ int main() {
           ++n;
         }
       }
-      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::printf("{\"case\": \"%s\", \"D_over_h\": %.0f, \"voxel_mm\": %.4f, \"step_mm\": %.4f, "
-                  "\"steps\": %d, \"worst_step_error\": %.5f, \"mean_step_error\": %.5f, "
-                  "\"ms_per_step\": %.3f}\n",
-                  name, ratio, h, L, n, worst, sum / n, 1000.0 * seconds / (n + 1));
+      const double seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::printf(
+          "{\"case\": \"%s\", \"D_over_h\": %.0f, \"voxel_mm\": %.4f, \"step_mm\": %.4f, "
+          "\"steps\": %d, \"worst_step_error\": %.5f, \"mean_step_error\": %.5f, "
+          "\"ms_per_step\": %.3f}\n",
+          name, ratio, h, L, n, worst, sum / n, 1000.0 * seconds / (n + 1));
     }
   }
   return 0;
