@@ -3,6 +3,8 @@
 #include "apps/ToolOptions.h"
 #include "cutters/Error.h"
 #include "engine/gcode/GcodeReader.h"
+#include "engine/gcode/GcodeWriter.h"
+#include "engine/schedule/FeedScheduler.h"
 #include "engine/sim/Simulation.h"
 #include "engine/units/Quantity.h"
 #include "stock/VoxelStock.h"
@@ -17,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -36,6 +39,15 @@ struct SimulateOptions {
   std::string units;
   std::string toolTable;
   bool quiet = false;
+  // schedule only
+  bool schedule = false;
+  std::string targetMrr = "auto";
+  std::string feedMin;
+  std::string feedMax;
+  std::string airFeed;
+  std::string accel;
+  std::string minChange = "0.05";
+  std::string minSegment;
 };
 
 /// Write text to `path` through a temporary name, so that nothing is ever half-written.
@@ -93,6 +105,30 @@ int runSimulate(const SimulateOptions& o) {
   if (!o.stepover.empty())
     so.stepover = parseQuantity(o.stepover, Dimension::Length, sys, "--stepover").value;
   if (!o.depth.empty()) so.depth = parseQuantity(o.depth, Dimension::Length, sys, "--depth").value;
+  ScheduleOptions sched;
+  if (o.schedule) {
+    if (o.targetMrr != "auto")
+      sched.targetMrr =
+          parseQuantity(o.targetMrr, Dimension::VolumeRate, sys, "--target-mrr").value;
+    auto feedOption = [&](const std::string& text, const char* name) {
+      return text.empty() ? 0.0 : parseQuantity(text, Dimension::Feed, sys, name).value;
+    };
+    sched.feedMin = feedOption(o.feedMin, "--feed-min");
+    sched.feedMax = feedOption(o.feedMax, "--feed-max");
+    sched.airFeed = feedOption(o.airFeed, "--air-feed");
+    if (!o.accel.empty())
+      sched.acceleration = parseQuantity(o.accel, Dimension::Acceleration, sys, "--accel").value;
+    try {
+      sched.minChange = std::stod(o.minChange);
+    } catch (const std::exception&) {
+      throw ParameterError("--min-change: expected a fraction such as 0.05, found '" + o.minChange +
+                           "'");
+    }
+    if (!(sched.minChange > 0.0 && sched.minChange < 1.0))
+      throw ParameterError("--min-change: expected a fraction in (0, 1), found " + o.minChange);
+    if (!o.minSegment.empty())
+      sched.minSegment = parseQuantity(o.minSegment, Dimension::Length, sys, "--min-segment").value;
+  }
   VoxelStock stock = makeStock(o.stock, voxel, sys);
   {
     // Does the cutter ever meet the stock?
@@ -136,6 +172,16 @@ int runSimulate(const SimulateOptions& o) {
       if (done == total) std::fprintf(stderr, "\n");
     };
   const SimulationResult r = simulate(path, cutter, stock, so);
+  // The schedule and the re-fed program are made before any output is written.
+  Schedule plan;
+  std::string refed;
+  if (o.schedule) {
+    plan = scheduleFeeds(path, r, sched);
+    std::ifstream in(o.program, std::ios::binary);
+    std::stringstream source;
+    source << in.rdbuf();
+    refed = writeProgram(source.str(), path, plan.plan);
+  }
 
   // Outputs.
   const std::filesystem::path dir(o.out);
@@ -148,7 +194,8 @@ int runSimulate(const SimulateOptions& o) {
   std::string csv = "step,move,line,kind,arc_length_" + L + ",x_" + L + ",y_" + L + ",z_" + L +
                     ",feed_" + F + ",dt_s,removed_" + V + ",mrr_" + Q + ",width_" + L + ",depth_" +
                     L + ",engagement_deg,curvature_1_" + L + ",path,mrr_exact_" + Q +
-                    ",mrr_paper_" + Q + ",voxels_changed\n";
+                    ",mrr_paper_" + Q + ",voxels_changed" +
+                    (o.schedule ? ",feed_scheduled_" + F + ",binding" : std::string()) + "\n";
   for (std::size_t i = 0; i < r.steps.size(); ++i) {
     const StepRecord& s = r.steps[i];
     csv += std::to_string(i) + "," + std::to_string(s.move) + "," + std::to_string(s.line) + "," +
@@ -160,7 +207,10 @@ int runSimulate(const SimulateOptions& o) {
            D(s.depth, Dimension::Length) + "," + formatNumber(s.engagementRad * 57.29577951308232) +
            "," + formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," +
            sideName(s.side) + "," + D(s.mrrExact, Dimension::VolumeRate) + "," +
-           D(s.mrrPaper, Dimension::VolumeRate) + "," + std::to_string(s.voxelsChanged) + "\n";
+           D(s.mrrPaper, Dimension::VolumeRate) + "," + std::to_string(s.voxelsChanged) +
+           (o.schedule ? "," + D(plan.feed[i], Dimension::Feed) + "," + bindingName(plan.binding[i])
+                       : std::string()) +
+           "\n";
   }
   writeAtomically(dir / "steps.csv", csv);
 
@@ -222,7 +272,47 @@ int runSimulate(const SimulateOptions& o) {
                       {"volume", std::string(unitLabel(Dimension::Volume, sys))},
                       {"mrr", std::string(unitLabel(Dimension::VolumeRate, sys))},
                       {"feed", std::string(unitLabel(Dimension::Feed, sys))}};
+  if (o.schedule) {
+    std::map<std::string, std::size_t> counts;
+    ordered_json places = ordered_json::array();
+    for (std::size_t i = 0; i < r.steps.size(); ++i) {
+      if (plan.binding[i] == Binding::None || r.steps[i].kind == MoveKind::Rapid) continue;
+      ++counts[bindingName(plan.binding[i])];
+      if (places.size() < 50 && (i == 0 || plan.binding[i - 1] != plan.binding[i]))
+        places.push_back(
+            {{"step", i}, {"line", r.steps[i].line}, {"limit", bindingName(plan.binding[i])}});
+    }
+    double mrrBefore = 0.0, peakBefore = 0.0, peakAfter = 0.0, meanAfter = 0.0;
+    std::size_t cutting = 0;
+    for (std::size_t i = 0; i < r.steps.size(); ++i) {
+      const StepRecord& s = r.steps[i];
+      if (s.kind == MoveKind::Rapid || s.mrr <= 0.0 || plan.binding[i] == Binding::Air) continue;
+      // The removal per unit length does not depend on the feed: the MRR scales with it.
+      const double after = s.mrr * plan.feed[i] / s.feed;
+      mrrBefore += s.mrr;
+      meanAfter += after;
+      peakBefore = std::max(peakBefore, s.mrr);
+      peakAfter = std::max(peakAfter, after);
+      ++cutting;
+    }
+    const double n = static_cast<double>(std::max<std::size_t>(cutting, 1));
+    j["schedule"] = {
+        {"target_mrr", toDisplay(plan.targetMrr, Dimension::VolumeRate, sys)},
+        {"acceleration_limit", num(toDisplay(sched.acceleration, Dimension::Acceleration, sys))},
+        {"max_acceleration", toDisplay(plan.maxAcceleration, Dimension::Acceleration, sys)},
+        {"feed_time_before_s", plan.timeBefore},
+        {"feed_time_after_s", plan.timeAfter},
+        {"saving_relative", plan.timeBefore > 0 ? 1.0 - plan.timeAfter / plan.timeBefore : 0.0},
+        {"mrr_mean_before", toDisplay(mrrBefore / n, Dimension::VolumeRate, sys)},
+        {"mrr_mean_after", toDisplay(meanAfter / n, Dimension::VolumeRate, sys)},
+        {"mrr_peak_before", toDisplay(peakBefore, Dimension::VolumeRate, sys)},
+        {"mrr_peak_after", toDisplay(peakAfter, Dimension::VolumeRate, sys)},
+        {"feed_pieces", plan.fWords},
+        {"steps_limited", counts},
+        {"limited_places", places}};
+  }
   writeAtomically(dir / "summary.json", j.dump(2) + "\n");
+  if (o.schedule) writeAtomically(dir / std::filesystem::path(o.program).filename(), refed);
   stock.writeRemovedVdb((dir / "removed.vdb").string());
   stock.writeStockVdb((dir / "stock.vdb").string());
   const std::size_t open = stock.writeStl((dir / "stock.stl").string());
@@ -245,35 +335,73 @@ int runSimulate(const SimulateOptions& o) {
     std::printf("warning: rapids removed %s of material (a crash on a machine)\n",
                 formatQuantity(r.rapidRemoved, Dimension::Volume, sys).c_str());
   if (open > 0) std::printf("warning: stock.stl has %zu open edges\n", open);
-  std::printf("wrote %s/{steps.csv,summary.json,removed.vdb,stock.vdb,stock.stl}\n", o.out.c_str());
+  if (o.schedule)
+    std::printf(
+        "schedule: target %s, feed time %.1f s -> %.1f s (%.1f %% saved), largest acceleration %s, "
+        "%zu feed pieces\n",
+        formatQuantity(plan.targetMrr, Dimension::VolumeRate, sys).c_str(), plan.timeBefore,
+        plan.timeAfter,
+        plan.timeBefore > 0 ? 100.0 * (1.0 - plan.timeAfter / plan.timeBefore) : 0.0,
+        formatQuantity(plan.maxAcceleration, Dimension::Acceleration, sys).c_str(), plan.fWords);
+  const std::string programName =
+      o.schedule ? "," + std::filesystem::path(o.program).filename().string() : "";
+  std::printf("wrote %s/{steps.csv,summary.json,removed.vdb,stock.vdb,stock.stl%s}\n",
+              o.out.c_str(), programName.c_str());
   return 0;
+}
+
+}  // namespace
+
+namespace {
+
+CLI::App* addCommon(CLI::App& app, const char* name, const char* help, SimulateOptions& o) {
+  CLI::App* cmd = app.add_subcommand(name, help);
+  cmd->add_option("program", o.program, "G-code program")->required();
+  addToolOptions(*cmd, o.tool, true);
+  cmd->add_option("--stock", o.stock,
+                  "box:X0,Y0,Z0,X1,Y1,Z1 (program units) or a closed STL/OBJ/PLY mesh (mm)")
+      ->required();
+  cmd->add_option("--voxel", o.voxel, "voxel size (default: cutter diameter / 20)");
+  cmd->add_option("--step", o.step, "longest step (default: 2.5 voxels)");
+  cmd->add_option("--stepover", o.stepover,
+                  "stepover for the analytic model (default: measured width)");
+  cmd->add_option("--depth", o.depth,
+                  "depth of cut for the analytic model (default: measured depth)");
+  cmd->add_option("--out", o.out, "output folder")->capture_default_str();
+  cmd->add_option("--units", o.units, "report units: mm or in (default: the program's)")
+      ->check(CLI::IsMember({"mm", "in"}));
+  cmd->add_option("--tool-table", o.toolTable, "LinuxCNC tool table for G43");
+  cmd->add_flag("--quiet", o.quiet, "no progress on the terminal");
+  return cmd;
 }
 
 }  // namespace
 
 void addSimulateCommand(CLI::App& app, std::function<int()>& run) {
   auto o = std::make_shared<SimulateOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "simulate",
-      "sweep the cutter through a voxel stock step by step: measured removal and "
-      "engagement beside the analytic model");
-  cmd->add_option("program", o->program, "G-code program")->required();
-  addToolOptions(*cmd, o->tool, true);
-  cmd->add_option("--stock", o->stock,
-                  "box:X0,Y0,Z0,X1,Y1,Z1 (program units) or a closed STL/OBJ/PLY mesh (mm)")
-      ->required();
-  cmd->add_option("--voxel", o->voxel, "voxel size (default: cutter diameter / 20)");
-  cmd->add_option("--step", o->step, "longest step (default: 2.5 voxels)");
-  cmd->add_option("--stepover", o->stepover,
-                  "stepover for the analytic model (default: measured width)");
-  cmd->add_option("--depth", o->depth,
-                  "depth of cut for the analytic model (default: measured depth)");
-  cmd->add_option("--out", o->out, "output folder")->capture_default_str();
-  cmd->add_option("--units", o->units, "report units: mm or in (default: the program's)")
-      ->check(CLI::IsMember({"mm", "in"}));
-  cmd->add_option("--tool-table", o->toolTable, "LinuxCNC tool table for G43");
-  cmd->add_flag("--quiet", o->quiet, "no progress on the terminal");
+  CLI::App* cmd = addCommon(app, "simulate",
+                            "sweep the cutter through a voxel stock step by step: measured removal "
+                            "and engagement beside the analytic model",
+                            *o);
   cmd->callback([o, &run] { run = [o] { return runSimulate(*o); }; });
+
+  auto so = std::make_shared<SimulateOptions>();
+  so->schedule = true;
+  CLI::App* sc = addCommon(app, "schedule",
+                           "simulate, then re-feed the program to hold the MRR at a target within "
+                           "the machine's feed and acceleration limits",
+                           *so);
+  sc->add_option("--target-mrr", so->targetMrr, "target MRR, e.g. 18000mm3/min, or auto")
+      ->capture_default_str();
+  sc->add_option("--feed-min", so->feedMin, "lowest feed to command");
+  sc->add_option("--feed-max", so->feedMax,
+                 "highest feed to command (default: twice the programmed)");
+  sc->add_option("--air-feed", so->airFeed, "feed where nothing is cut (default: the programmed)");
+  sc->add_option("--accel", so->accel, "tangential acceleration limit, e.g. 2000mm/s2 or 0.3g");
+  sc->add_option("--min-change", so->minChange, "relative step between F levels")
+      ->capture_default_str();
+  sc->add_option("--min-segment", so->minSegment, "shortest run of one feed along the path");
+  sc->callback([so, &run] { run = [so] { return runSimulate(*so); }; });
 }
 
 }  // namespace engage::app

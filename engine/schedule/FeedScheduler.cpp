@@ -1,0 +1,243 @@
+#include "engine/schedule/FeedScheduler.h"
+
+#include "cutters/Error.h"
+#include "engine/units/Quantity.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace engage {
+namespace {
+
+/// Steps whose MRR is below this share of the target cut air.
+constexpr double kAirShare = 0.01;
+
+bool isFeedStep(const StepRecord& s) {
+  return s.kind != MoveKind::Rapid && s.feed > 0.0;
+}
+
+/// Lower feeds so that no change between successive feed steps needs more than `a` (mm/s^2):
+/// a forward pass limits speeding up, a backward pass makes the cutter slow down before a
+/// load peak instead of after it.
+void limitAcceleration(const SimulationResult& sim, std::vector<double>& feed, double a) {
+  if (!(a > 0.0)) return;
+  const auto& st = sim.steps;
+  auto v = [&](std::size_t i) { return feed[i] / 60.0; };
+  for (std::size_t i = 1; i < st.size(); ++i) {
+    if (!isFeedStep(st[i]) || !isFeedStep(st[i - 1])) continue;
+    const double cap = std::sqrt(v(i - 1) * v(i - 1) + 2.0 * a * st[i].length) * 60.0;
+    feed[i] = std::min(feed[i], cap);
+  }
+  for (std::size_t i = st.size() - 1; i-- > 0;) {
+    if (!isFeedStep(st[i]) || !isFeedStep(st[i + 1])) continue;
+    const double cap = std::sqrt(v(i + 1) * v(i + 1) + 2.0 * a * st[i + 1].length) * 60.0;
+    feed[i] = std::min(feed[i], cap);
+  }
+}
+
+/// Round feeds down to geometric levels base (1 + q)^k; feeds equal to the programmed one
+/// stay as they are (no F word where nothing changes).
+void quantizeDown(const SimulationResult& sim, std::vector<double>& feed, double base, double q) {
+  for (std::size_t i = 0; i < feed.size(); ++i) {
+    if (!isFeedStep(sim.steps[i]) || feed[i] == sim.steps[i].feed) continue;
+    const double k = std::floor(std::log(feed[i] / base) / std::log1p(q) + 1e-9);
+    feed[i] = std::min(feed[i], base * std::pow(1.0 + q, k));
+  }
+}
+
+/// Runs of one feed shorter than `minSegment` take the lower of their neighbours' feeds.
+void mergeShortRuns(const SimulationResult& sim, std::vector<double>& feed, double minSegment) {
+  if (!(minSegment > 0.0)) return;
+  const auto& st = sim.steps;
+  std::size_t i = 0;
+  while (i < st.size()) {
+    if (!isFeedStep(st[i])) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    double length = 0.0;
+    while (j < st.size() && isFeedStep(st[j]) && feed[j] == feed[i])
+      length += st[j++].length;
+    if (length < minSegment) {
+      double lower = feed[i];
+      if (i > 0 && isFeedStep(st[i - 1])) lower = std::min(lower, feed[i - 1]);
+      if (j < st.size() && isFeedStep(st[j])) lower = std::min(lower, feed[j]);
+      for (std::size_t k = i; k < j; ++k)
+        feed[k] = lower;
+    }
+    i = j;
+  }
+}
+
+}  // namespace
+
+const char* bindingName(Binding b) {
+  switch (b) {
+    case Binding::None:
+      return "none";
+    case Binding::FeedMin:
+      return "feed_min";
+    case Binding::FeedMax:
+      return "feed_max";
+    case Binding::Acceleration:
+      return "acceleration";
+    case Binding::Air:
+      return "air";
+    case Binding::Plunge:
+      return "plunge";
+  }
+  return "none";
+}
+
+double feedTime(const SimulationResult& sim, const std::vector<double>& feed, double acceleration) {
+  std::vector<double> f = feed;
+  limitAcceleration(sim, f, acceleration);
+  double t = 0.0;
+  const auto& st = sim.steps;
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    if (!isFeedStep(st[i]) || !(f[i] > 0.0)) continue;
+    // Eq 24's time between successive feeds: dt = 2 ds / (f_i + f_{i+1}).
+    const double previous = i > 0 && isFeedStep(st[i - 1]) ? f[i - 1] : f[i];
+    t += 2.0 * st[i].length / ((previous + f[i]) / 60.0);
+  }
+  return t;
+}
+
+Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
+                       const ScheduleOptions& o) {
+  const auto& st = sim.steps;
+  Schedule out;
+  // Target: given, or the median MRR of the steady straight steps.
+  out.targetMrr = o.targetMrr;
+  if (!(out.targetMrr > 0.0)) {
+    std::vector<double> steady;
+    for (std::size_t i = 1; i + 1 < st.size(); ++i) {
+      const StepRecord &a = st[i - 1], &r = st[i], &b = st[i + 1];
+      if (r.side != PathSide::Straight || !isFeedStep(r) || r.mrr <= 0.0 || a.move != r.move ||
+          b.move != r.move)
+        continue;
+      if (std::abs(a.mrr / r.mrr - 1.0) < 0.02 && std::abs(b.mrr / r.mrr - 1.0) < 0.02)
+        steady.push_back(r.mrr);
+    }
+    if (steady.empty())
+      throw ParameterError(
+          "--target-mrr auto needs steady straight cutting steps; this program has none: give a "
+          "target");
+    std::nth_element(steady.begin(), steady.begin() + static_cast<long>(steady.size() / 2),
+                     steady.end());
+    out.targetMrr = steady[steady.size() / 2];
+  }
+  double programmedMax = 0.0;
+  for (const StepRecord& s : st)
+    programmedMax = std::max(programmedMax, s.feed);
+  const double fMax = o.feedMax > 0.0 ? o.feedMax : 2.0 * programmedMax;
+  const double fMin = o.feedMin > 0.0 ? o.feedMin : std::min(1.0, fMax);
+  if (!(fMin <= fMax))
+    throw ParameterError("--feed-min " + formatQuantity(fMin, Dimension::Feed, UnitSystem::Metric) +
+                         " exceeds --feed-max " +
+                         formatQuantity(fMax, Dimension::Feed, UnitSystem::Metric));
+  if (!(o.minChange > 0.0)) throw ParameterError("--min-change must be positive");
+
+  out.wanted.assign(st.size(), 0.0);
+  out.binding.assign(st.size(), Binding::None);
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    const StepRecord& s = st[i];
+    if (!isFeedStep(s)) continue;
+    if (s.mrr < kAirShare * out.targetMrr) {
+      out.wanted[i] = std::clamp(o.airFeed > 0.0 ? o.airFeed : s.feed, fMin, fMax);
+      out.binding[i] = Binding::Air;
+      continue;
+    }
+    double f = s.feed * out.targetMrr / s.mrr;
+    // Plunges (no horizontal motion) load the cutter's end, not its flank: never faster
+    // than programmed.
+    const Move& m = path.moves[s.move];
+    const bool plunge =
+        m.kind == MoveKind::Line && (m.end.head<2>() - m.start.head<2>()).norm() < 1e-9;
+    if (plunge && f > s.feed) {
+      f = s.feed;
+      out.binding[i] = Binding::Plunge;
+    }
+    out.wanted[i] = std::clamp(f, fMin, fMax);
+    if (f < fMin) out.binding[i] = Binding::FeedMin;
+    if (f > fMax) out.binding[i] = Binding::FeedMax;
+  }
+
+  // Lines that the writer cannot split (canned cycles: several feed moves on one line;
+  // splines) take one feed: the lowest their steps want.
+  std::map<int, int> blockFeedMoves;
+  for (const Move& m : path.moves)
+    if (m.kind != MoveKind::Rapid) ++blockFeedMoves[m.block];
+  auto oneFeed = [&](const Move& m) {
+    return m.kind == MoveKind::Spline || blockFeedMoves[m.block] > 1;
+  };
+  auto unify = [&](std::vector<double>& feed) {
+    std::map<int, double> lowest;
+    for (std::size_t i = 0; i < st.size(); ++i) {
+      const Move& m = path.moves[st[i].move];
+      if (!isFeedStep(st[i]) || !oneFeed(m)) continue;
+      const auto it = lowest.find(m.block);
+      lowest[m.block] = it == lowest.end() ? feed[i] : std::min(it->second, feed[i]);
+    }
+    for (std::size_t i = 0; i < st.size(); ++i) {
+      const Move& m = path.moves[st[i].move];
+      if (isFeedStep(st[i]) && oneFeed(m)) feed[i] = lowest[m.block];
+    }
+  };
+
+  // Acceleration, F-word levels, short runs and unsplittable lines, until nothing changes
+  // (each of them only lowers feeds, so this ends).
+  out.feed = out.wanted;
+  for (int round = 0; round < 50; ++round) {
+    const std::vector<double> before = out.feed;
+    limitAcceleration(sim, out.feed, o.acceleration);
+    quantizeDown(sim, out.feed, fMin, o.minChange);
+    mergeShortRuns(sim, out.feed, o.minSegment);
+    unify(out.feed);
+    if (out.feed == before) break;
+  }
+  for (std::size_t i = 0; i < st.size(); ++i)
+    if (isFeedStep(st[i]) && out.binding[i] == Binding::None &&
+        out.feed[i] < out.wanted[i] / (1.0 + o.minChange) - 1e-9)
+      out.binding[i] = Binding::Acceleration;
+
+  // The plan: per move, runs of one feed become pieces.
+  out.plan.assign(path.moves.size(), {});
+  std::vector<double> moveLength(path.moves.size(), 0.0);
+  for (const StepRecord& s : st)
+    moveLength[s.move] += s.length;
+  std::vector<double> done(path.moves.size(), 0.0);
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    const StepRecord& s = st[i];
+    done[s.move] += s.length;
+    if (!isFeedStep(s)) continue;
+    auto& pieces = out.plan[s.move];
+    const double until = std::min(1.0, done[s.move] / moveLength[s.move]);
+    if (!pieces.empty() && pieces.back().feed == out.feed[i])
+      pieces.back().until = until;
+    else
+      pieces.push_back({until, out.feed[i]});
+  }
+  for (auto& pieces : out.plan) {
+    if (pieces.empty()) continue;
+    pieces.back().until = 1.0;
+    out.fWords += pieces.size();
+  }
+
+  std::vector<double> programmed(st.size(), 0.0);
+  for (std::size_t i = 0; i < st.size(); ++i)
+    programmed[i] = st[i].feed;
+  out.timeBefore = feedTime(sim, programmed, o.acceleration);
+  out.timeAfter = feedTime(sim, out.feed, o.acceleration);
+  for (std::size_t i = 1; i < st.size(); ++i)
+    if (isFeedStep(st[i]) && isFeedStep(st[i - 1])) {
+      const double v0 = out.feed[i - 1] / 60.0, v1 = out.feed[i] / 60.0;
+      out.maxAcceleration =
+          std::max(out.maxAcceleration, std::abs(v1 * v1 - v0 * v0) / (2.0 * st[i].length));
+    }
+  return out;
+}
+
+}  // namespace engage

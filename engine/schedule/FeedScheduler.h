@@ -1,0 +1,59 @@
+#pragma once
+/// \file FeedScheduler.h
+/// Adaptive feed from the simulated engagement (paper §4.2, driven by what the stock really
+/// does): per step the feed that brings the measured MRR to a target, within the machine's
+/// feed and tangential-acceleration limits, turned into F words the way users of such
+/// optimisers ask for them (a minimum relative change between F words, levels rounded down,
+/// a minimum segment length), and the feed plan that GcodeWriter writes back. Steps that cut
+/// nothing run at the air feed; plunges never run faster than programmed; lines the writer
+/// cannot split (canned cycles, splines) take their lowest feed.
+
+#include "engine/gcode/GcodeWriter.h"
+#include "engine/gcode/Toolpath.h"
+#include "engine/sim/Simulation.h"
+
+#include <string>
+#include <vector>
+
+namespace engage {
+
+/// Settings of one schedule. Feeds mm/min, MRR mm^3/min, acceleration mm/s^2, lengths mm.
+struct ScheduleOptions {
+  /// Target MRR; 0 means "auto": the median measured MRR of the steady straight steps.
+  double targetMrr = 0.0;
+  double feedMin = 0.0;       ///< lowest feed the scheduler may command
+  double feedMax = 0.0;       ///< highest (0: 2 x the highest programmed feed)
+  double airFeed = 0.0;       ///< feed of steps that cut nothing (0: the programmed feed)
+  double acceleration = 0.0;  ///< tangential acceleration limit (0: none)
+  double minChange = 0.05;    ///< relative step between feed levels
+  double minSegment = 0.0;    ///< shortest run of one feed level along the path (0: one step)
+};
+
+/// Why a step's feed is not the one that meets the target.
+enum class Binding { None, FeedMin, FeedMax, Acceleration, Air, Plunge };
+
+/// The result: per-step feeds and the plan for the writer.
+struct Schedule {
+  double targetMrr = 0.0;
+  std::vector<double> wanted;    ///< per step: the feed that meets the target (clamped)
+  std::vector<double> feed;      ///< per step: the scheduled (commanded) feed
+  std::vector<Binding> binding;  ///< per step: what keeps it from `wanted`
+  FeedPlan plan;                 ///< per move: the pieces for GcodeWriter
+  double timeBefore = 0.0;       ///< feed-move time with the programmed feeds, s
+  double timeAfter = 0.0;        ///< with the scheduled feeds, s
+  double maxAcceleration = 0.0;  ///< largest |Eq 24 acceleration| between scheduled steps, mm/s^2
+  std::size_t fWords = 0;        ///< feed pieces in the plan
+};
+
+/// Schedule feeds for a simulated tool path. Throws ParameterError for inconsistent limits.
+Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
+                       const ScheduleOptions& options);
+
+/// Time to run the feed steps with per-step feeds `feed` (mm/min) under an acceleration limit
+/// (mm/s^2, 0: none): each step at its feed, the changes between them at the limit (Eq 24's
+/// time between successive feeds). Seconds.
+double feedTime(const SimulationResult& sim, const std::vector<double>& feed, double acceleration);
+
+const char* bindingName(Binding b);
+
+}  // namespace engage
