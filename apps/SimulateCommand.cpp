@@ -4,6 +4,8 @@
 #include "cutters/Error.h"
 #include "engine/gcode/GcodeReader.h"
 #include "engine/gcode/GcodeWriter.h"
+#include "engine/model/EngagementModel.h"
+#include "engine/report/Plots.h"
 #include "engine/schedule/FeedScheduler.h"
 #include "engine/sim/Simulation.h"
 #include "engine/units/Quantity.h"
@@ -190,27 +192,41 @@ int runSimulate(const SimulateOptions& o) {
   const std::string F(unitTag(Dimension::Feed, sys));
   const std::string V(unitTag(Dimension::Volume, sys));
   const std::string Q(unitTag(Dimension::VolumeRate, sys));
+  const std::string A(unitTag(Dimension::Acceleration, sys));
+  // Eq 24 between the previous feed step and this one, with the scheduled feeds, mm/s^2.
+  auto accelerationAt = [&](std::size_t i) {
+    if (i == 0 || r.steps[i].kind == MoveKind::Rapid || r.steps[i - 1].kind == MoveKind::Rapid)
+      return 0.0;
+    return tangentialAcceleration(plan.feed[i - 1], plan.feed[i], r.steps[i].length);
+  };
   auto D = [&](double v, Dimension d) { return formatNumber(toDisplay(v, d, sys)); };
-  std::string csv = "step,move,line,kind,arc_length_" + L + ",x_" + L + ",y_" + L + ",z_" + L +
-                    ",feed_" + F + ",dt_s,removed_" + V + ",mrr_" + Q + ",width_" + L + ",depth_" +
-                    L + ",engagement_deg,curvature_1_" + L + ",path,mrr_exact_" + Q +
-                    ",mrr_paper_" + Q + ",voxels_changed" +
-                    (o.schedule ? ",feed_scheduled_" + F + ",binding" : std::string()) + "\n";
+  std::string csv =
+      "step,move,line,kind,arc_length_" + L + ",x_" + L + ",y_" + L + ",z_" + L + ",feed_" + F +
+      ",dt_s,removed_" + V + ",mrr_" + Q + ",width_" + L + ",depth_" + L +
+      ",engagement_deg,curvature_1_" + L + ",path,mrr_exact_" + Q + ",mrr_paper_" + Q +
+      ",voxels_changed" +
+      (o.schedule ? ",feed_scheduled_" + F + ",binding,mrr_scheduled_" + Q + ",acceleration_" + A
+                  : std::string()) +
+      "\n";
   for (std::size_t i = 0; i < r.steps.size(); ++i) {
     const StepRecord& s = r.steps[i];
-    csv += std::to_string(i) + "," + std::to_string(s.move) + "," + std::to_string(s.line) + "," +
-           moveKindName(s.kind) + "," + D(s.arcLength, Dimension::Length) + "," +
-           D(s.end.x(), Dimension::Length) + "," + D(s.end.y(), Dimension::Length) + "," +
-           D(s.end.z(), Dimension::Length) + "," + D(s.feed, Dimension::Feed) + "," +
-           formatNumber(s.dt) + "," + D(s.removed, Dimension::Volume) + "," +
-           D(s.mrr, Dimension::VolumeRate) + "," + D(s.width, Dimension::Length) + "," +
-           D(s.depth, Dimension::Length) + "," + formatNumber(s.engagementRad * 57.29577951308232) +
-           "," + formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," +
-           sideName(s.side) + "," + D(s.mrrExact, Dimension::VolumeRate) + "," +
-           D(s.mrrPaper, Dimension::VolumeRate) + "," + std::to_string(s.voxelsChanged) +
-           (o.schedule ? "," + D(plan.feed[i], Dimension::Feed) + "," + bindingName(plan.binding[i])
-                       : std::string()) +
-           "\n";
+    csv +=
+        std::to_string(i) + "," + std::to_string(s.move) + "," + std::to_string(s.line) + "," +
+        moveKindName(s.kind) + "," + D(s.arcLength, Dimension::Length) + "," +
+        D(s.end.x(), Dimension::Length) + "," + D(s.end.y(), Dimension::Length) + "," +
+        D(s.end.z(), Dimension::Length) + "," + D(s.feed, Dimension::Feed) + "," +
+        formatNumber(s.dt) + "," + D(s.removed, Dimension::Volume) + "," +
+        D(s.mrr, Dimension::VolumeRate) + "," + D(s.width, Dimension::Length) + "," +
+        D(s.depth, Dimension::Length) + "," + formatNumber(s.engagementRad * 57.29577951308232) +
+        "," + formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," +
+        sideName(s.side) + "," + D(s.mrrExact, Dimension::VolumeRate) + "," +
+        D(s.mrrPaper, Dimension::VolumeRate) + "," + std::to_string(s.voxelsChanged) +
+        (o.schedule
+             ? "," + D(plan.feed[i], Dimension::Feed) + "," + bindingName(plan.binding[i]) + "," +
+                   D(s.feed > 0 ? s.mrr * plan.feed[i] / s.feed : 0.0, Dimension::VolumeRate) +
+                   "," + D(accelerationAt(i), Dimension::Acceleration)
+             : std::string()) +
+        "\n";
   }
   writeAtomically(dir / "steps.csv", csv);
 
@@ -313,6 +329,25 @@ int runSimulate(const SimulateOptions& o) {
   }
   writeAtomically(dir / "summary.json", j.dump(2) + "\n");
   if (o.schedule) writeAtomically(dir / std::filesystem::path(o.program).filename(), refed);
+  PlotSpec ps;
+  ps.folder = dir.string();
+  ps.length = L;
+  ps.feed = F;
+  ps.rate = Q;
+  ps.accelerationTag = A;
+  ps.lengthLabel = unitLabel(Dimension::Length, sys);
+  ps.feedLabel = unitLabel(Dimension::Feed, sys);
+  ps.rateLabel = unitLabel(Dimension::VolumeRate, sys);
+  ps.accelerationLabel = unitLabel(Dimension::Acceleration, sys);
+  ps.schedule = o.schedule;
+  ps.accelerationLimit = toDisplay(sched.acceleration, Dimension::Acceleration, sys);
+  std::string plotted;
+  try {
+    for (const std::string& f : writePlots(ps))
+      if (f.size() > 4 && f.compare(f.size() - 4, 4, ".png") == 0) plotted += "," + f;
+  } catch (const Error& e) {
+    std::fprintf(stderr, "engage: warning: plots not drawn: %s\n", e.what());
+  }
   stock.writeRemovedVdb((dir / "removed.vdb").string());
   stock.writeStockVdb((dir / "stock.vdb").string());
   const std::size_t open = stock.writeStl((dir / "stock.stl").string());
@@ -345,8 +380,8 @@ int runSimulate(const SimulateOptions& o) {
         formatQuantity(plan.maxAcceleration, Dimension::Acceleration, sys).c_str(), plan.fWords);
   const std::string programName =
       o.schedule ? "," + std::filesystem::path(o.program).filename().string() : "";
-  std::printf("wrote %s/{steps.csv,summary.json,removed.vdb,stock.vdb,stock.stl%s}\n",
-              o.out.c_str(), programName.c_str());
+  std::printf("wrote %s/{steps.csv,summary.json,removed.vdb,stock.vdb,stock.stl%s%s}\n",
+              o.out.c_str(), programName.c_str(), plotted.c_str());
   return 0;
 }
 

@@ -4,7 +4,7 @@ set -euo pipefail
 packages=(
   cmake make g++ ccache
   libeigen3-dev libtbb-dev libopenvdb-dev libopenvdb-tools zlib1g-dev libboost-iostreams-dev
-  libopenmesh-dev libcli11-dev nlohmann-json3-dev libpolyclipping-dev catch2
+  libopenmesh-dev libcli11-dev nlohmann-json3-dev libpolyclipping-dev catch2 gnuplot-nox
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,0 +1,91 @@
+#include "engine/report/Plots.h"
+
+#include "cutters/Error.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+namespace engage {
+namespace {
+
+std::string quoted(const std::string& s) {
+  return "\"" + s + "\"";
+}
+
+}  // namespace
+
+std::vector<std::string> writePlots(const PlotSpec& p) {
+  const std::filesystem::path dir(p.folder);
+  const std::string L = p.length, F = p.feed, Q = p.rate;
+  std::vector<std::string> files;
+  std::string script =
+      "set datafile separator ','\nset datafile columnheaders\nset grid\nset key outside top "
+      "center horizontal\n";
+  // One plot in two formats; each written to a temporary name first.
+  auto plot = [&](const std::string& name, const std::string& body) {
+    for (const char* fmt : {"png", "svg"}) {
+      const std::string file = name + "." + fmt;
+      script +=
+          std::string(fmt[0] == 'p' ? "set terminal pngcairo size 1400,700 font ',11'\n"
+                                    : "set terminal svg size 1400,700 dynamic font 'sans,11'\n") +
+          "set output " + quoted(file + ".part") + "\n" + body + "unset output\n";
+      files.push_back(file);
+    }
+  };
+  const std::string x = "\"arc_length_" + L + "\"";
+  std::string mrr =
+      "set title 'Material removal rate along the path'\nset xlabel 'arc length (" + p.lengthLabel +
+      ")'\nset ylabel 'MRR (" + p.rateLabel + ")'\n" + "plot 'steps.csv' using " + x + ":\"mrr_" +
+      Q + "\" with lines lw 1.5 title 'measured (voxels)', " + "'' using " + x + ":\"mrr_exact_" +
+      Q + "\" with lines lw 1 dt 2 title 'analytic, exact', " + "'' using " + x + ":\"mrr_paper_" +
+      Q + "\" with lines lw 1 dt 3 title 'analytic, paper'";
+  if (p.schedule)
+    mrr += ", '' using " + x + ":\"mrr_scheduled_" + Q +
+           "\" with lines lw 1.5 title 'measured, re-fed'";
+  plot("mrr", mrr + "\n");
+  if (p.schedule) {
+    plot("feed", "set title 'Feed'\nset xlabel 'arc length (" + p.lengthLabel +
+                     ")'\nset ylabel 'feed (" + p.feedLabel + ")'\nplot 'steps.csv' using " + x +
+                     ":\"feed_" + F + "\" with lines lw 1.5 title 'programmed', '' using " + x +
+                     ":\"feed_scheduled_" + F + "\" with lines lw 1.5 title 'scheduled'\n");
+    std::string acc =
+        "set title 'Tangential acceleration between successive feeds (Eq 24)'\nset xlabel 'arc "
+        "length (" +
+        p.lengthLabel + ")'\nset ylabel 'acceleration (" + p.accelerationLabel +
+        ")'\nplot 'steps.csv' using " + x + ":\"acceleration_" + p.accelerationTag +
+        "\" with lines lw 1.5 title 'scheduled'";
+    if (p.accelerationLimit > 0) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.6g", p.accelerationLimit);
+      acc += std::string(", ") + buf + " with lines lw 2 lc 'red' title 'limit', -" + buf +
+             " with lines lw 2 lc 'red' notitle";
+    }
+    plot("acceleration", acc + "\n");
+  }
+  plot("topview", "set title 'Top view, coloured by measured MRR (" + p.rateLabel +
+                      ")'\nset size ratio -1\nset xlabel 'x (" + p.lengthLabel +
+                      ")'\nset ylabel 'y (" + p.lengthLabel + ")'\nset palette rgb 33,13,10\n" +
+                      "plot 'steps.csv' using (strcol(\"kind\") eq \"rapid\" ? NaN : column(\"x_" +
+                      L + "\")):\"y_" + L + "\":\"mrr_" + Q +
+                      "\" with points pt 7 ps 0.4 lc palette notitle\nset size noratio\n");
+  const std::filesystem::path scriptFile = dir / "plots.gp";
+  {
+    std::ofstream f(scriptFile);
+    if (!f) throw Error("cannot write '" + scriptFile.string() + "'");
+    f << script;
+  }
+  const std::string command = "cd " + quoted(dir.string()) + " && gnuplot plots.gp 2> plots.log";
+  const int rc = std::system(command.c_str());
+  if (rc != 0)
+    throw Error("gnuplot failed (is Debian's gnuplot-nox installed?); see " +
+                (dir / "plots.log").string());
+  for (const std::string& file : files)
+    std::filesystem::rename(dir / (file + ".part"), dir / file);
+  std::filesystem::remove(dir / "plots.log");
+  files.push_back("plots.gp");
+  return files;
+}
+
+}  // namespace engage

@@ -1,0 +1,29 @@
+#pragma once
+/// \file Plots.h
+/// Plots of a run, drawn by gnuplot (Debian gnuplot-nox) from the run's steps.csv, as PNG and
+/// SVG: the MRR along the path (measured, analytic exact and paper, and after scheduling), the
+/// programmed and scheduled feeds, the tangential acceleration with its limit (paper Fig 14c),
+/// and a top view of the path coloured by MRR.
+
+#include <string>
+#include <vector>
+
+namespace engage {
+
+/// What to plot, in the run's units.
+struct PlotSpec {
+  std::string folder;  ///< where steps.csv is and the plots go
+  std::string length;  ///< column tag of lengths, e.g. "mm"
+  std::string feed;    ///< e.g. "mm_min"
+  std::string rate;    ///< e.g. "mm3_min"
+  std::string lengthLabel, feedLabel, rateLabel, accelerationLabel;  ///< axis units
+  std::string accelerationTag;                                       ///< e.g. "mm_s2"
+  bool schedule = false;         ///< steps.csv has the scheduled columns
+  double accelerationLimit = 0;  ///< in the plot's units; 0: none drawn
+};
+
+/// Draw the plots; returns the files written (without the folder). Throws Error when gnuplot
+/// is missing or fails, naming it.
+std::vector<std::string> writePlots(const PlotSpec& spec);
+
+}  // namespace engage
