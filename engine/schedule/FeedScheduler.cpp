@@ -36,13 +36,24 @@ void limitAcceleration(const SimulationResult& sim, std::vector<double>& feed, d
   }
 }
 
-/// Round feeds down to geometric levels base (1 + q)^k; feeds equal to the programmed one
-/// stay as they are (no F word where nothing changes).
-void quantizeDown(const SimulationResult& sim, std::vector<double>& feed, double base, double q) {
+/// Round feeds down to the levels F (1 + q)^k of the step's programmed feed F (k an integer):
+/// the programmed feed is a level, so unchanged steps keep it, and any two levels of a move
+/// differ by at least the factor 1 + q. Hysteresis: a step keeps the previous step's level
+/// while that is at most q/2 above its own wanted feed, so that the noise of the measured MRR
+/// does not toggle F words. Levels below `floor` are lifted to it.
+void quantizeDown(const SimulationResult& sim, std::vector<double>& feed, double floor, double q) {
+  double previous = 0.0;
   for (std::size_t i = 0; i < feed.size(); ++i) {
-    if (!isFeedStep(sim.steps[i]) || feed[i] == sim.steps[i].feed) continue;
+    if (!isFeedStep(sim.steps[i])) {
+      previous = 0.0;
+      continue;
+    }
+    const double base = sim.steps[i].feed;
     const double k = std::floor(std::log(feed[i] / base) / std::log1p(q) + 1e-9);
-    feed[i] = std::min(feed[i], base * std::pow(1.0 + q, k));
+    double level = std::max(std::min(feed[i], base * std::pow(1.0 + q, k)), std::min(floor, feed[i]));
+    if (previous > level && previous <= feed[i] * (1.0 + 0.5 * q)) level = previous;
+    feed[i] = level;
+    previous = level;
   }
 }
 

@@ -3,8 +3,9 @@
 /// Adaptive feed from the simulated engagement (paper §4.2, driven by what the stock really
 /// does): per step the feed that brings the measured MRR to a target, within the machine's
 /// feed and tangential-acceleration limits, turned into F words the way users of such
-/// optimisers ask for them (a minimum relative change between F words, levels rounded down,
-/// a minimum segment length), and the feed plan that GcodeWriter writes back. Steps that cut
+/// optimisers ask for them (a minimum relative change between F words, levels rounded down
+/// with hysteresis: a level is kept while at most half a level above the wanted feed, a
+/// minimum segment length), and the feed plan that GcodeWriter writes back. Steps that cut
 /// nothing run at the air feed; plunges never run faster than programmed; lines the writer
 /// cannot split (canned cycles, splines) take their lowest feed.
 
