@@ -1,6 +1,7 @@
 #include "cutters/Sweep.h"
 
 #include "cutters/Error.h"
+#include "cutters/Geometry.h"
 #include "cutters/Tolerances.h"
 
 #include <algorithm>
@@ -13,14 +14,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kTwoPi = 2.0 * kPi;
 /// Height change below which a step counts as horizontal, mm.
 constexpr double kFlatZ = 1e-9;
-
-double distanceToSegment2d(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
-                           const Eigen::Vector2d& b) {
-  const Eigen::Vector2d d = b - a;
-  const double len2 = d.squaredNorm();
-  const double t = len2 > 0.0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
-  return (a + t * d - p).norm();
-}
 
 /// Is angle `a` within the sweep that starts at a0 and turns by `sweep` (signed)?
 bool withinSweep(double a, double a0, double sweep) {
@@ -151,7 +144,7 @@ double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient
   const double above = p.z() - zHigh_;
   const double across =
       (path_.kind == StepPath::Kind::Line
-           ? distanceToSegment2d(p.head<2>(), path_.start.head<2>(), path_.end.head<2>())
+           ? distanceToSegment(p.head<2>(), path_.start.head<2>(), path_.end.head<2>())
            : band_) -
       cutter_.maxRadius();
   const double bound = std::max({below, above, across});
@@ -183,7 +176,7 @@ double Sweep::flatDistance(const Eigen::Vector3d& p) const {
   const Eigen::Vector2d q(p.x(), p.y());
   double rho = 0.0;
   if (path_.kind == StepPath::Kind::Line) {
-    rho = distanceToSegment2d(q, path_.start.head<2>(), path_.end.head<2>());
+    rho = distanceToSegment(q, path_.start.head<2>(), path_.end.head<2>());
   } else {
     const Eigen::Vector2d c = path_.center.head<2>();
     const double r = (path_.start.head<2>() - c).norm();

@@ -1,6 +1,7 @@
 #include "engine/gcode/Spline.h"
 
 #include "cutters/Error.h"
+#include "cutters/Geometry.h"
 
 #include <algorithm>
 #include <cmath>
@@ -13,14 +14,6 @@ using Curve = std::function<Eigen::Vector2d(double)>;
 /// Work limit of one curve: huge coordinates could never meet the tolerance in doubles.
 constexpr std::size_t kMaxPieces = 100000;
 
-double distanceToChord(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
-                       const Eigen::Vector2d& b) {
-  const Eigen::Vector2d d = b - a;
-  const double len2 = d.squaredNorm();
-  const double t = len2 > 0.0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
-  return (a + t * d - p).norm();
-}
-
 void subdivide(const Curve& f, double t0, double t1, const Eigen::Vector2d& a,
                const Eigen::Vector2d& b, double tolerance, int depth,
                std::vector<Eigen::Vector2d>& out) {
@@ -28,8 +21,8 @@ void subdivide(const Curve& f, double t0, double t1, const Eigen::Vector2d& a,
   const Eigen::Vector2d q1 = f(t0 + 0.25 * dt);
   const Eigen::Vector2d q2 = f(t0 + 0.5 * dt);
   const Eigen::Vector2d q3 = f(t0 + 0.75 * dt);
-  const double error =
-      std::max({distanceToChord(q1, a, b), distanceToChord(q2, a, b), distanceToChord(q3, a, b)});
+  const double error = std::max(
+      {distanceToSegment(q1, a, b), distanceToSegment(q2, a, b), distanceToSegment(q3, a, b)});
   if (error <= tolerance || depth >= 24) {
     out.push_back(b);
     if (out.size() > kMaxPieces)
