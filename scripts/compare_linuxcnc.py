@@ -63,7 +63,7 @@ def linuxcnc_moves(path, tool_table):
             g92 = [v[0] * unit, v[1] * unit, v[2] * unit]
         elif name == "SELECT_PLANE":
             plane = "XY" if "XY" in args else ("XZ" if "XZ" in args else "YZ")
-        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
+        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STRAIGHT_PROBE"):
             v = numbers(args)
             end = [v[i] * unit + g5x[i] + g92[i] for i in range(3)]
             moves.append({"kind": "rapid" if name == "STRAIGHT_TRAVERSE" else "line", "end": end})

@@ -682,6 +682,7 @@ class Interpreter final : public gcode::ParameterSource {
     std::array<std::optional<double>, 28> v;
     std::array<int, 28> col{};
     std::vector<std::pair<int, int>> g;  ///< (code x10, column)
+    bool otherAxes = false;              ///< A, B, C, U, V or W words on the line
     std::vector<std::pair<int, int>> m;
     bool has(char c) const { return v[slot(c)].has_value(); }
     double get(char c) const { return *v[slot(c)]; }
@@ -751,12 +752,10 @@ class Interpreter final : public gcode::ParameterSource {
       w.v[i] = word.value;
       w.col[i] = word.column;
     }
+    // Rotary and UVW words are read and kept out of the XYZ path; the move is marked so that
+    // a 3-axis simulation can refuse it with the line named.
     for (const char axis : {'A', 'B', 'C', 'U', 'V', 'W'})
-      if (w.has(axis))
-        fail(
-            w.column(axis),
-            std::string("expected X, Y or Z axis words (engage simulates 3-axis milling), found ") +
-                axis);
+      if (w.has(axis)) w.otherAxes = true;
     return w;
   }
 
@@ -882,7 +881,9 @@ class Interpreter final : public gcode::ParameterSource {
         if (gGroup(code) == 0 && code != 40 && code != 530) return code;
       return std::nullopt;
     }();
-    const bool axes = w.has('X') || w.has('Y') || w.has('Z') || w.has('@') || w.has('^');
+    const bool axes =
+        w.has('X') || w.has('Y') || w.has('Z') || w.has('@') || w.has('^') || w.otherAxes;
+    otherAxes_ = w.otherAxes;
     const std::optional<int> motionWord = w.gIn(1);
     if (g0 && motionWord && axes && (*g0 == 100 || *g0 == 280 || *g0 == 300 || *g0 == 920))
       fail(w.gColumn(*g0), "expected either " + codeName('G', *g0) +
@@ -1089,6 +1090,7 @@ class Interpreter final : public gcode::ParameterSource {
     m.feedMode = feedMode_;
     m.workOffset = workOffset();
     m.block = recordBlock();
+    m.otherAxes = otherAxes_;
     return m;
   }
 
@@ -1520,6 +1522,7 @@ class Interpreter final : public gcode::ParameterSource {
   int tool_ = 0;
   int preparedTool_ = 0;
   double toolLength_ = 0.0;
+  bool otherAxes_ = false;  ///< the current line has rotary or UVW words
   int motion_ = 800;        ///< G80: axis words need a motion word first, as in LinuxCNC
   int motionBefore_ = 800;  ///< motion mode before the current block
   bool cycleActive_ = false;

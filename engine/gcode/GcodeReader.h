@@ -12,9 +12,11 @@
 /// expressions, and O-word subroutines (in the program or in <name>.ngc beside it), loops
 /// and conditionals.
 ///
-/// Not supported, each a GcodeError naming the word: cutter compensation G41/G42, rotary and
-/// UVW axes, probing G38, threading G33/G76, lathe modes, boring cycles G86-G88, canned cycles
-/// outside G17, user M codes M100-M199.
+/// Rotary and UVW words are read but stay out of the XYZ path (the move is marked otherAxes).
+///
+/// Not supported, each a GcodeError naming the word: cutter compensation G41/G42, probing G38
+/// (its result needs a machine), threading G33/G76, lathe modes, boring cycles G86-G88, canned cycles outside G17, user M codes
+/// M100-M199.
 
 #include "cutters/Error.h"
 #include "engine/gcode/Toolpath.h"

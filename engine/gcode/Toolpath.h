@@ -57,6 +57,7 @@ struct Move {
   int file = 0;             ///< index into Toolpath::files
   int line = 0;             ///< 1-based source line
   int block = 0;            ///< index into Toolpath::blocks: the executed line it came from
+  bool otherAxes = false;   ///< its line also commands A, B, C, U, V or W (not in the path)
 
   // How the move was programmed, so that a writer can emit it back in the same terms.
   bool inch = false;                ///< G20

@@ -60,6 +60,11 @@ void finish(Agreement& a) {
 
 SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelStock& stock,
                           const SimulationOptions& options) {
+  for (const Move& m : path.moves)
+    if (m.otherAxes)
+      throw ParameterError(
+          path.files[static_cast<std::size_t>(m.file)] + ":" + std::to_string(m.line) +
+          ": this line moves a rotary or UVW axis; engage simulates 3-axis milling");
   const double h = stock.voxelSize();
   const double L = options.stepLength > 0.0 ? options.stepLength : 2.5 * h;
   SimulationResult out;

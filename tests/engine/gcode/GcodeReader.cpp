@@ -264,6 +264,16 @@ TEST_CASE("subroutines, loops and conditionals", "[gcode]") {
   CHECK(m[9].end.x() == 30.0);
 }
 
+TEST_CASE("rotary and UVW words stay out of the XYZ path, marked on the move", "[gcode]") {
+  const auto m = moves("G0 X1 A90\nG1 X2 F100\nG0 B45\nM2\n");
+  REQUIRE(m.size() == 3);
+  checkPoint(m[0].end, 1, 0, 0);
+  CHECK(m[0].otherAxes);
+  CHECK_FALSE(m[1].otherAxes);
+  CHECK(m[2].otherAxes);
+  checkPoint(m[2].end, 2, 0, 0);  // an A/B-only move keeps X, Y, Z
+}
+
 TEST_CASE("splines are flattened within 0.001 mm", "[gcode]") {
   const auto m = moves("G0 X0 Y0\nG1 F100\nG5 X10 Y0 I2 J5 P-2 Q5\nM2\n");
   REQUIRE(m[1].kind == MoveKind::Spline);
@@ -316,7 +326,6 @@ TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]"
              Contains("1:13: expected ')' closing this comment"));
   CHECK_THAT(errorOf("G1 X10 $\n"),
              Contains("1:8: expected a word letter (G, M, X, F, ...), found '$'"));
-  CHECK_THAT(errorOf("G0 A10\n"), Contains("1:4: expected X, Y or Z axis words"));
   CHECK_THAT(errorOf("X10\n"), Contains("expected a motion mode"));
   CHECK_THAT(errorOf("o<nowhere> call\n"), Contains("expected a subroutine o<nowhere>"));
   CHECK_THAT(errorOf("G0 X[1/0]\n"),

@@ -133,7 +133,8 @@ TEST_CASE("paper Fig 9: uncut corner material raises the MRR before a 90 deg cor
   auto expectedStep = [&](double x0, double x1) {
     double integral = 0.0;
     const int n = 2000;
-    for (int i = 0; i < n; ++i) integral += F((x0 + (x1 - x0) * (i + 0.5) / n) / r);
+    for (int i = 0; i < n; ++i)
+      integral += F((x0 + (x1 - x0) * (i + 0.5) / n) / r);
     return d * r * (x1 - x0) + d * r * integral * (x1 - x0) / n;
   };
   const double nominal = d * r * feed;  // 3600 mm^3/min
@@ -161,6 +162,17 @@ TEST_CASE("paper Fig 9: uncut corner material raises the MRR before a 90 deg cor
   CHECK(peakExpected == Approx(expectedStep(-last, 0.0) / (d * r * last)).epsilon(1e-9));
   CHECK(peakExpected == Approx(1.9898).epsilon(1e-4));
   CHECK(peakRatio == Approx(peakExpected).epsilon(0.02));
-  CHECK(peakRatio > 1.8);                     // close to the full slot's 2
+  CHECK(peakRatio > 1.8);                            // close to the full slot's 2
   CHECK(peakAnalytic == Approx(1.0).epsilon(1e-9));  // the model misses it
+}
+
+TEST_CASE("programs that move rotary axes are refused with the line", "[sim]") {
+  const Toolpath path = readProgramText("G21\nG0 X0 Y0 Z5\nG0 A90\nM2\n", "rotary.ngc");
+  Box3 b;
+  b.min = {-10, -10, -10};
+  b.max = {10, 10, 0};
+  VoxelStock stock = VoxelStock::box(b, 0.5);
+  CHECK_THROWS_WITH(
+      simulate(path, AptCutter::flat(6.0, 18.0), stock, {}),
+      Catch::Matchers::Contains("rotary.ngc:3: this line moves a rotary or UVW axis"));
 }
