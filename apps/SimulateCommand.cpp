@@ -50,6 +50,10 @@ struct SimulateOptions {
   std::string accel;
   std::string minChange = "0.05";
   std::string minSegment;
+  std::string forceLimit;
+  std::string specificEnergy;
+  std::string spindle;
+  std::string model = "measured";
 };
 
 /// Write text to `path` through a temporary name, so that nothing is ever half-written.
@@ -130,6 +134,19 @@ int runSimulate(const SimulateOptions& o) {
       throw ParameterError("--min-change: expected a fraction in (0, 1), found " + o.minChange);
     if (!o.minSegment.empty())
       sched.minSegment = parseQuantity(o.minSegment, Dimension::Length, sys, "--min-segment").value;
+    sched.analytic = o.model == "analytic";
+    if (!o.forceLimit.empty()) {
+      if (o.targetMrr != "auto") throw ParameterError("give either --target-mrr or --force-limit");
+      if (o.specificEnergy.empty() || o.spindle.empty())
+        throw ParameterError(
+            "--force-limit needs --specific-energy and --spindle (paper Eq 17-18)");
+      sched.targetMrr = mrrForForce(
+          parseQuantity(o.forceLimit, Dimension::Force, sys, "--force-limit").value,
+          parseQuantity(o.specificEnergy, Dimension::SpecificEnergy, sys, "--specific-energy")
+              .value,
+          2.0 * cutter.radius(),
+          parseQuantity(o.spindle, Dimension::SpindleSpeed, sys, "--spindle").value);
+    }
   }
   VoxelStock stock = makeStock(o.stock, voxel, sys);
   {
@@ -436,6 +453,13 @@ void addSimulateCommand(CLI::App& app, std::function<int()>& run) {
   sc->add_option("--min-change", so->minChange, "relative step between F levels")
       ->capture_default_str();
   sc->add_option("--min-segment", so->minSegment, "shortest run of one feed along the path");
+  sc->add_option("--force-limit", so->forceLimit,
+                 "tangential force to hold instead of an MRR (with --specific-energy, --spindle)");
+  sc->add_option("--specific-energy", so->specificEnergy, "specific cutting energy, e.g. 0.7J/mm3");
+  sc->add_option("--spindle", so->spindle, "spindle speed, e.g. 12000rpm");
+  sc->add_option("--model", so->model, "schedule from the measured MRR or the analytic model")
+      ->check(CLI::IsMember({"measured", "analytic"}))
+      ->capture_default_str();
   sc->callback([so, &run] { run = [so] { return runSimulate(*so); }; });
 }
 

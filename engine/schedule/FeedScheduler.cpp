@@ -1,6 +1,7 @@
 #include "engine/schedule/FeedScheduler.h"
 
 #include "cutters/Error.h"
+#include "engine/model/EngagementModel.h"
 #include "engine/units/Quantity.h"
 
 #include <algorithm>
@@ -50,7 +51,8 @@ void quantizeDown(const SimulationResult& sim, std::vector<double>& feed, double
     }
     const double base = sim.steps[i].feed;
     const double k = std::floor(std::log(feed[i] / base) / std::log1p(q) + 1e-9);
-    double level = std::max(std::min(feed[i], base * std::pow(1.0 + q, k)), std::min(floor, feed[i]));
+    double level =
+        std::max(std::min(feed[i], base * std::pow(1.0 + q, k)), std::min(floor, feed[i]));
     if (previous > level && previous <= feed[i] * (1.0 + 0.5 * q)) level = previous;
     feed[i] = level;
     previous = level;
@@ -100,6 +102,15 @@ const char* bindingName(Binding b) {
       return "plunge";
   }
   return "none";
+}
+
+double mrrForForce(double force, double specificEnergy, double diameter, double spindleRpm) {
+  if (!(force > 0.0 && specificEnergy > 0.0 && diameter > 0.0 && spindleRpm > 0.0))
+    throw ParameterError(
+        "a force-limited target needs a positive force, specific energy, diameter and spindle "
+        "speed");
+  // Eq 18: F = MRR E / v, so MRR = F v / E (tangentialForce's units: 1000 N = J/mm).
+  return force * cuttingSpeed(diameter, spindleRpm) / (1000.0 * specificEnergy);
 }
 
 double feedTime(const SimulationResult& sim, const std::vector<double>& feed, double acceleration) {
@@ -156,12 +167,13 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   for (std::size_t i = 0; i < st.size(); ++i) {
     const StepRecord& s = st[i];
     if (!isFeedStep(s)) continue;
-    if (s.mrr < kAirShare * out.targetMrr) {
+    const double mrr = o.analytic ? (std::isfinite(s.mrrExact) ? s.mrrExact : 0.0) : s.mrr;
+    if (mrr < kAirShare * out.targetMrr) {
       out.wanted[i] = std::clamp(o.airFeed > 0.0 ? o.airFeed : s.feed, fMin, fMax);
       out.binding[i] = Binding::Air;
       continue;
     }
-    double f = s.feed * out.targetMrr / s.mrr;
+    double f = s.feed * out.targetMrr / mrr;
     // Plunges (no horizontal motion) load the cutter's end, not its flank: never faster
     // than programmed.
     const Move& m = path.moves[s.move];

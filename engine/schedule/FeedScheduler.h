@@ -28,7 +28,15 @@ struct ScheduleOptions {
   double acceleration = 0.0;  ///< tangential acceleration limit (0: none)
   double minChange = 0.05;    ///< relative step between feed levels
   double minSegment = 0.0;    ///< shortest run of one feed level along the path (0: one step)
+  /// Schedule from the analytic model of each step (paper Eq 21-23 through its MRR, with the
+  /// step's curvature and the simulation's stepover/depth) instead of the measured MRR.
+  bool analytic = false;
 };
+
+/// The MRR that keeps the tangential cutting force at `force` (N), paper Eq 17-18 inverted:
+/// MRR = F v / E with v = pi D N. mm^3/min, for specific energy E (J/mm^3), cutter diameter D
+/// (mm) and spindle speed N (rpm). Throws ParameterError for non-positive inputs.
+double mrrForForce(double force, double specificEnergy, double diameter, double spindleRpm);
 
 /// Why a step's feed is not the one that meets the target.
 enum class Binding { None, FeedMin, FeedMax, Acceleration, Air, Plunge };

@@ -3,6 +3,7 @@
 #include "engine/schedule/FeedScheduler.h"
 
 #include "engine/gcode/GcodeReader.h"
+#include "engine/model/EngagementModel.h"
 
 #include <catch2/catch.hpp>
 
@@ -164,11 +165,42 @@ TEST_CASE("F words: levels a minimum change apart, rounded down; air feed; short
   // Successive different feeds differ by at least the minimum change.
   for (std::size_t i = 5; i < 20; ++i)
     if (sc.feed[i] != sc.feed[i - 1])
-      CHECK(std::max(sc.feed[i], sc.feed[i - 1]) / std::min(sc.feed[i], sc.feed[i - 1]) >= 1.05 - 1e-9);
+      CHECK(std::max(sc.feed[i], sc.feed[i - 1]) / std::min(sc.feed[i], sc.feed[i - 1]) >=
+            1.05 - 1e-9);
   // With a 5 mm minimum segment every run of one feed (after the air) is at least 5 steps or
   // takes a lower neighbour's feed: fewer pieces, none faster than wanted.
   o.minSegment = 5.0;
   const Schedule merged = scheduleFeeds(path, sim, o);
   CHECK(merged.fWords <= sc.fWords);
-  for (std::size_t i = 4; i < 20; ++i) CHECK(merged.feed[i] <= merged.wanted[i] * (1.025 + 1e-12));
+  for (std::size_t i = 4; i < 20; ++i)
+    CHECK(merged.feed[i] <= merged.wanted[i] * (1.025 + 1e-12));
+}
+
+TEST_CASE("a force limit gives the target MRR through Eq 17-18", "[schedule]") {
+  // F = 200 N, E = 2 J/mm^3, D = 10 mm at 10000 rpm: v = pi 10 10000 mm/min = 314159 mm/min,
+  // MRR = F v / E = 200 N x 314.159 m/min / 2 J/mm^3 = 31415.9 mm^3/min.
+  CHECK(mrrForForce(200.0, 2.0, 10.0, 10000.0) == Approx(31415.93).epsilon(1e-6));
+  // Round trip through the forward model (Eq 18).
+  CHECK(tangentialForce(mrrForForce(200.0, 2.0, 10.0, 10000.0), 2.0, cuttingSpeed(10.0, 10000.0)) ==
+        Approx(200.0).epsilon(1e-12));
+  CHECK_THROWS_AS(mrrForForce(0.0, 2.0, 10.0, 10000.0), ParameterError);
+}
+
+TEST_CASE("the analytic model can drive the schedule instead of the measurement", "[schedule]") {
+  // The corner program with the model at s = r, d = 2: the model sees a straight path
+  // (MRR 3600 at 600 mm/min everywhere), so it keeps 600 mm/min into the corner the
+  // measurement slows down for (the point of paper Fig 9).
+  const Toolpath path = readProgramText(fig9(), "fig9.ngc");
+  VoxelStock stock = fig9Stock();
+  SimulationOptions so;
+  so.stepover = 3.0;
+  so.depth = 2.0;
+  const SimulationResult sim = simulate(path, AptCutter::flat(6.0, 18.0), stock, so);
+  ScheduleOptions o;
+  o.targetMrr = 3600.0;
+  o.analytic = true;
+  const Schedule sc = scheduleFeeds(path, sim, o);
+  for (std::size_t i = 0; i < sim.steps.size(); ++i)
+    if (sim.steps[i].line == 15 && sc.binding[i] == Binding::None)
+      CHECK(sc.feed[i] == Approx(600.0));
 }
