@@ -264,6 +264,8 @@ AptCutter::AptCutter(const AptParameters& p, int flutes, CutterShape shape)
     throw ParameterError(mm("cutting height h", h) + " leaves no cutter: the radius at h is 0");
   addLine(top, {0.0, h});
 
+  roundedBox_ =
+      p_.taperAngleRad == 0.0 && p_.bottomAngleRad == 0.0 && p_.height >= 2.0 * p_.cornerRadius;
   maxRadius_ = 0.0;
   for (const Seg& s : profile_) {
     maxRadius_ = std::max({maxRadius_, s.start.x(), s.end.x()});
@@ -288,6 +290,19 @@ double AptCutter::radiusAt(double z) const {
 }
 
 double AptCutter::profileSignedDistance(double rho, double z) const {
+  if (roundedBox_) {
+    // Flat, ball and bull cutters: the profile mirrored about the axis is a box of half-size
+    // (r, h/2) whose bottom corners are rounded by r_tc; the exact distance of such a box in
+    // closed form (this is the simulator's hot path).
+    const double half = 0.5 * p_.height;
+    const double y = z - half;
+    const double rad = y < 0.0 ? p_.cornerRadius : 0.0;
+    const double qx = std::abs(rho) - p_.radius + rad;
+    const double qy = std::abs(y) - half + rad;
+    const double ox = std::max(qx, 0.0);
+    const double oy = std::max(qy, 0.0);
+    return std::min(std::max(qx, qy), 0.0) + std::sqrt(ox * ox + oy * oy) - rad;
+  }
   const Eigen::Vector2d q(std::abs(rho), z);
   double d = std::numeric_limits<double>::infinity();
   for (const ProfileSegment& s : profile_)

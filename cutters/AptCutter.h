@@ -125,6 +125,7 @@ class AptCutter {
   CutterShape shape_ = CutterShape::General;
   std::vector<ProfileSegment> profile_;
   double maxRadius_ = 0.0;
+  bool roundedBox_ = false;  ///< beta = delta = 0 and h >= 2 r_tc: closed-form distance
 };
 
 }  // namespace engage

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
 using Catch::Matchers::Contains;
 using engage::AptCutter;
@@ -191,6 +192,39 @@ TEST_CASE("signed distance to the solid of revolution", "[cutters]") {
     const double rho = 5.0 + 10.0 * std::tan(deg(30.0)) + 2.0 * std::cos(deg(30.0));
     const double z = 10.0 - 2.0 * std::sin(deg(30.0));
     CHECK(c.profileSignedDistance(rho, z) == Approx(2.0).margin(kExact));
+  }
+}
+
+TEST_CASE("signed distance agrees with a brute-force distance to the sampled profile",
+          "[cutters]") {
+  // Independent check: the profile boundary sampled every 1e-4 mm (W(z) up the side, the
+  // flat bottom, the top cap), the minimum distance to the samples, the sign from W(z).
+  // Tolerance 1e-4 mm: the sampling step bounds the brute force's error.
+  for (const AptCutter& c :
+       {AptCutter::flat(6.0, 12.0), AptCutter::ball(6.0, 12.0), AptCutter::bull(6.0, 1.5, 12.0),
+        AptCutter::taper(6.0, deg(10.0), 12.0), AptCutter::chamfer(6.0, deg(90.0), 12.0)}) {
+    std::vector<Eigen::Vector2d> boundary;
+    for (double z = 0.0; z <= 12.0; z += 1e-4)
+      boundary.emplace_back(c.radiusAt(z), z);
+    for (double r = 0.0; r <= c.radiusAt(0.0); r += 1e-4)
+      boundary.emplace_back(r, 0.0);
+    for (double r = 0.0; r <= c.radiusAt(12.0); r += 1e-4)
+      boundary.emplace_back(r, 12.0);
+    unsigned seed = 12345;
+    auto next = [&seed]() {
+      seed = seed * 1103515245u + 12345u;
+      return static_cast<double>((seed >> 8) & 0xFFFF) / 65535.0;
+    };
+    for (int k = 0; k < 40; ++k) {
+      const double rho = 5.0 * next();
+      const double z = -1.0 + 14.0 * next();
+      double best = 1e300;
+      for (const Eigen::Vector2d& b : boundary)
+        best = std::min(best, (b - Eigen::Vector2d(rho, z)).norm());
+      const bool inside = z >= 0.0 && z <= 12.0 && rho <= c.radiusAt(z);
+      INFO(shapeName(c.shape()) << " at rho " << rho << ", z " << z);
+      CHECK(c.profileSignedDistance(rho, z) == Approx(inside ? -best : best).margin(1e-4));
+    }
   }
 }
 
