@@ -228,12 +228,13 @@ double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter) const {
   };
   if (convexLine_) {
     // The signed distance of a convex solid is convex, and so is its composition with the
-    // straight motion: golden-section search finds the minimum without sampling. Ten
-    // iterations leave 0.8 % of the step: a few micrometres of tip position, and the
-    // distance is flat at its minimum.
+    // straight motion: golden-section search finds the minimum without sampling. Eight
+    // iterations leave 2.1 % of the step: the distance changes at most by the step's travel
+    // times that at its minimum (1 um for a 0.5 mm step descending 0.05 mm), and ten
+    // iterations changed no removed volume beyond the sixth digit on the benchmark.
     consider(0.0, f(0.0));
     consider(1.0, f(1.0));
-    golden(0.0, 1.0, 10);
+    golden(0.0, 1.0, 8);
     return bestValue;
   }
   std::size_t best = 0;
