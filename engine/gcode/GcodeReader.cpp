@@ -382,7 +382,7 @@ class Interpreter final : public gcode::ParameterSource {
       while (words >> w) {
         const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(w[0])));
         const double v = std::strtod(w.c_str() + 1, nullptr);
-        if (c == 'T') tool = static_cast<int>(v);
+        if (c == 'T' && v >= 0.0 && v <= 1e6) tool = static_cast<int>(v);
         if (c == 'Z') length = v;
       }
       if (tool >= 0) toolLengths_[tool] = length * (options_.toolTableInch ? kInch : 1.0);
@@ -453,6 +453,8 @@ class Interpreter final : public gcode::ParameterSource {
     if (a.number >= 5420 && a.number <= 5422)
       fail(a.column, "expected a writable parameter, found #" + std::to_string(a.number) +
                          " (the current position) on the left of '='");
+    if (a.number == 5220 && !(a.value >= 1.0 && a.value <= 9.0 && a.value == std::round(a.value)))
+      fail(a.column, "expected a coordinate system 1..9 in #5220, found " + num(a.value));
     params_[static_cast<std::size_t>(a.number)] = a.value;
   }
 

@@ -267,6 +267,10 @@ class Parser {
     const double r = std::round(v);
     if (std::abs(v - r) > 1e-4)
       failAt(at, "expected an integer parameter number, found " + std::to_string(v));
+    // Far outside any parameter range: say so before converting (a double that does not fit
+    // an int must not be cast).
+    if (!(std::abs(r) <= 1e9))
+      failAt(at, "expected a parameter number in 1..5602, found " + std::to_string(v));
     return static_cast<int>(r);
   }
 

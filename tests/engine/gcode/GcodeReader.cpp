@@ -334,6 +334,10 @@ TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]"
              Contains("1:5: expected a parameter that has a value, found #<unset> unset"));
   CHECK_THAT(errorOf("G0 X[SQRT[-1]]\n"), Contains("expected a non-negative SQRT argument"));
   CHECK_THAT(errorOf("#6000=1\n"), Contains("expected a parameter number in 1..5602, found #6000"));
+  // Found by the fuzzer (UBSan): a parameter number beyond int, a bad coordinate system.
+  CHECK_THAT(errorOf("G0 X#[1111111111111]\n"), Contains("expected a parameter number in 1..5602"));
+  CHECK_THAT(errorOf("#5220=12\nG0 X1\n"),
+             Contains("expected a coordinate system 1..9 in #5220, found 12"));
   CHECK_THAT(errorOf("G0 X1 X2\n"),
              Contains("1:7: expected one X word per line, found a second X"));
   CHECK_THAT(errorOf("G81 X1 Z-1 F10\n"), Contains("expected an R word"));
