@@ -74,6 +74,7 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
   struct Planned {
     std::size_t move;
     double t0, t1;
+    double length;  ///< of the step, mm (a spline's length is a walk over its points: once)
   };
   std::vector<Planned> plan;
   for (std::size_t i = 0; i < path.moves.size(); ++i) {
@@ -81,7 +82,7 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
     if (len <= 0.0) continue;
     const int n = std::max(1, static_cast<int>(std::ceil(len / L - 1e-9)));
     for (int k = 0; k < n; ++k)
-      plan.push_back({i, static_cast<double>(k) / n, static_cast<double>(k + 1) / n});
+      plan.push_back({i, static_cast<double>(k) / n, static_cast<double>(k + 1) / n, len / n});
   }
 
   const auto start = std::chrono::steady_clock::now();
@@ -95,7 +96,7 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
     r.move = p.move;
     r.line = m.line;
     r.kind = m.kind;
-    r.length = moveLength(m) * (p.t1 - p.t0);
+    r.length = p.length;
     arc += r.length;
     r.arcLength = arc;
     r.end = sp.end;
