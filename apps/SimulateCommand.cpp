@@ -155,14 +155,11 @@ int runSimulate(const SimulateOptions& o) {
     bool meets = false;
     const double w = cutter.maxRadius();
     for (const Move& m : path.moves) {
-      const Eigen::Vector3d lo =
-          m.start.cwiseMin(m.end) -
-          Eigen::Vector3d(w + (m.kind == MoveKind::Arc ? arcRadius(m) * 2 : 0),
-                          w + (m.kind == MoveKind::Arc ? arcRadius(m) * 2 : 0), 0);
+      // An arc can bulge up to its diameter beyond its end points.
+      const double reach = w + (m.kind == MoveKind::Arc ? 2.0 * arcRadius(m) : 0.0);
+      const Eigen::Vector3d lo = m.start.cwiseMin(m.end) - Eigen::Vector3d(reach, reach, 0.0);
       const Eigen::Vector3d hi =
-          m.start.cwiseMax(m.end) +
-          Eigen::Vector3d(w + (m.kind == MoveKind::Arc ? arcRadius(m) * 2 : 0),
-                          w + (m.kind == MoveKind::Arc ? arcRadius(m) * 2 : 0), cutter.height());
+          m.start.cwiseMax(m.end) + Eigen::Vector3d(reach, reach, cutter.height());
       if ((lo.array() <= sb.max.array()).all() && (hi.array() >= sb.min.array()).all()) {
         meets = true;
         break;

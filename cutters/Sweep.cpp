@@ -116,10 +116,6 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
   }
 }
 
-double Sweep::endDistance(const Eigen::Vector3d& p) const {
-  return cutter_.signedDistance(p - path_.end);
-}
-
 double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const {
   const double e = resolution_ / 8.0;
   if (flat_) {

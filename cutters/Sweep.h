@@ -51,8 +51,6 @@ class Sweep {
   /// Far from the surface (beyond `resolution`) the value may be a bound of the right sign
   /// and the gradient is not set.
   double signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient = nullptr) const;
-  /// Signed distance from a world point to the cutter at the step's end, mm.
-  double endDistance(const Eigen::Vector3d& p) const;
   /// World bounding box of the swept solid, mm.
   Box3 bounds() const { return bounds_; }
   const StepPath& path() const { return path_; }

@@ -253,10 +253,6 @@ Box3 VoxelStock::bounds() const {
   return b;
 }
 
-long VoxelStock::leafVoxelCount() const {
-  return static_cast<long>(impl_->grid->tree().leafCount() * Leaf::SIZE);
-}
-
 std::size_t VoxelStock::memoryBytes() const {
   std::size_t bytes = impl_->grid->memUsage();
   if (impl_->removed)

@@ -59,8 +59,7 @@ class VoxelStock {
   double volume() const;
   /// Bounds of the material, mm (empty box when no material is left).
   Box3 bounds() const;
-  /// Number of voxels stored in leaves (a measure of memory), and bytes used by the grids.
-  long leafVoxelCount() const;
+  /// Bytes used by the grids (the stock and, when captured, the removed-volume grids).
   std::size_t memoryBytes() const;
 
   /// Record, for every voxel that loses material, how much it lost, the index of the first

@@ -1389,7 +1389,6 @@ class Interpreter final : public gcode::ParameterSource {
     if (w.has('R')) cycleR_ = w.get('R');
     if (w.has('Z')) cycleZ_ = w.get('Z');
     if (w.has('Q')) cycleQ_ = w.get('Q');
-    if (w.has('P')) cycleP_ = w.get('P');
     double r, bottom;
     if (incremental_) {
       r = oldZ + cycleR_ * unit();
@@ -1530,7 +1529,7 @@ class Interpreter final : public gcode::ParameterSource {
   bool cycleActive_ = false;
   bool cycleInitialValid_ = false;
   double cycleInitial_ = 0.0;  ///< mm, machine Z where the current run of cycles began
-  double cycleR_ = 0.0, cycleZ_ = 0.0, cycleQ_ = 0.0, cycleP_ = 0.0;
+  double cycleR_ = 0.0, cycleZ_ = 0.0, cycleQ_ = 0.0;
   std::optional<Eigen::Vector2d> lastCubic_;
   std::vector<std::pair<Eigen::Vector2d, double>> nurbs_;
   int nurbsOrder_ = 3;
