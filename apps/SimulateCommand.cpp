@@ -1,5 +1,6 @@
 #include "apps/SimulateCommand.h"
 
+#include "apps/Output.h"
 #include "apps/ToolOptions.h"
 #include "cutters/Error.h"
 #include "engine/gcode/GcodeReader.h"
@@ -55,18 +56,6 @@ struct SimulateOptions {
   std::string spindle;
   std::string model = "measured";
 };
-
-/// Write text to `path` through a temporary name, so that nothing is ever half-written.
-void writeAtomically(const std::filesystem::path& path, const std::string& text) {
-  const std::filesystem::path tmp = path.string() + ".part";
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    if (!f) throw Error("cannot write '" + path.string() + "'");
-    f << text;
-    if (!f) throw Error("cannot write '" + path.string() + "'");
-  }
-  std::filesystem::rename(tmp, path);
-}
 
 VoxelStock makeStock(const std::string& spec, double voxel, UnitSystem sys) {
   if (spec.rfind("box:", 0) == 0) {
@@ -193,10 +182,7 @@ int runSimulate(const SimulateOptions& o) {
   std::string refed;
   if (o.schedule) {
     plan = scheduleFeeds(path, r, sched);
-    std::ifstream in(o.program, std::ios::binary);
-    std::stringstream source;
-    source << in.rdbuf();
-    refed = writeProgram(source.str(), path, plan.plan);
+    refed = writeProgram(readFile(o.program), path, plan.plan);
   }
 
   // Outputs.

@@ -6,6 +6,7 @@
 
 #include "apps/AnalyzeCommand.h"
 #include "apps/MovesCommand.h"
+#include "apps/PocketCommand.h"
 #include "apps/SimulateCommand.h"
 #include "cutters/Error.h"
 
@@ -25,6 +26,7 @@ int main(int argc, char** argv) {
   engage::app::addAnalyzeCommand(app, run);
   engage::app::addMovesCommand(app, run);
   engage::app::addSimulateCommand(app, run);
+  engage::app::addPocketCommand(app, run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

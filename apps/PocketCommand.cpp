@@ -1,0 +1,113 @@
+#include "apps/PocketCommand.h"
+
+#include "apps/Output.h"
+#include "cutters/Error.h"
+#include "engine/cam/Pocket.h"
+#include "engine/gcode/GcodeReader.h"
+#include "engine/units/Quantity.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace engage::app {
+namespace {
+
+struct PocketCommandOptions {
+  std::string boundary;
+  std::string output;
+  std::string diameter;
+  std::string stepover;
+  std::string depth;
+  std::string stepDown;
+  std::string top = "0";
+  std::string safeZ;
+  std::string feed;
+  std::string plungeFeed;
+  std::string tolerance;
+  std::string units;
+  bool conventional = false;
+};
+
+int runPocket(const PocketCommandOptions& c) {
+  const Toolpath boundary = readProgram(c.boundary);
+  const UnitSystem sys = c.units == "in"   ? UnitSystem::Inch
+                         : c.units == "mm" ? UnitSystem::Metric
+                         : boundary.inch   ? UnitSystem::Inch
+                                           : UnitSystem::Metric;
+  auto length = [&](const std::string& text, const char* name) {
+    return parseQuantity(text, Dimension::Length, sys, name).value;
+  };
+  PocketOptions o;
+  o.toolRadius = 0.5 * length(c.diameter, "--diameter");
+  o.stepover = length(c.stepover, "--stepover");
+  o.depth = length(c.depth, "--depth");
+  if (!c.stepDown.empty()) o.stepDown = length(c.stepDown, "--step-down");
+  o.top = length(c.top, "--top");
+  o.safeZ = c.safeZ.empty() ? o.top + (sys == UnitSystem::Inch ? 0.2 * 25.4 : 5.0)
+                            : length(c.safeZ, "--safe-z");
+  o.feed = parseQuantity(c.feed, Dimension::Feed, sys, "--feed").value;
+  o.plungeFeed = c.plungeFeed.empty()
+                     ? 0.5 * o.feed
+                     : parseQuantity(c.plungeFeed, Dimension::Feed, sys, "--plunge-feed").value;
+  if (!c.tolerance.empty()) o.tolerance = length(c.tolerance, "--tolerance");
+  o.climb = !c.conventional;
+  o.inch = sys == UnitSystem::Inch;
+  // Everything is made before the file is written.
+  const std::vector<Loop> loops = boundaryLoops(boundary);
+  const std::vector<Ring> rings = pocketRings(loops, o);
+  std::size_t arcs = 0, lines = 0;
+  int levels = 0;
+  for (const Ring& r : rings) {
+    levels = std::max(levels, r.level + 1);
+    for (const Element& e : r.elements)
+      (e.arc ? arcs : lines) += 1;
+  }
+  const std::string program = writePocketProgram(
+      rings, o,
+      {"engage pocket " + std::filesystem::path(c.boundary).filename().string() +
+           ": contour-parallel, inside out",
+       "tool diameter " + formatQuantity(2.0 * o.toolRadius, Dimension::Length, sys) +
+           ", stepover " + formatQuantity(o.stepover, Dimension::Length, sys) + ", depth " +
+           formatQuantity(o.depth, Dimension::Length, sys) + " from Z " +
+           formatQuantity(o.top, Dimension::Length, sys) + ", feed " +
+           formatQuantity(o.feed, Dimension::Feed, sys) + ", " +
+           (o.climb ? "climb" : "conventional")});
+  const std::filesystem::path parent = std::filesystem::path(c.output).parent_path();
+  if (!parent.empty()) std::filesystem::create_directories(parent);
+  writeAtomically(c.output, program);
+  std::printf("%zu rings on %d level(s): %zu arcs, %zu lines; wrote %s\n", rings.size(), levels,
+              arcs, lines, c.output.c_str());
+  return 0;
+}
+
+}  // namespace
+
+void addPocketCommand(CLI::App& app, std::function<int()>& run) {
+  auto o = std::make_shared<PocketCommandOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "pocket",
+      "write a contour-parallel pocket program (inside out, arcs kept) for a boundary given as "
+      "closed G1/G2/G3 loops");
+  cmd->add_option("boundary", o->boundary,
+                  "G-code boundary: the first closed loop is the pocket, loops inside it islands")
+      ->required();
+  cmd->add_option("-o,--output", o->output, "program to write")->required();
+  cmd->add_option("--diameter", o->diameter, "tool diameter at the floor")->required();
+  cmd->add_option("--stepover", o->stepover, "distance between rings")->required();
+  cmd->add_option("--depth", o->depth, "pocket depth below --top")->required();
+  cmd->add_option("--step-down", o->stepDown, "depth per level (default: all at once)");
+  cmd->add_option("--top", o->top, "Z of the stock top")->capture_default_str();
+  cmd->add_option("--safe-z", o->safeZ, "retract height (default: top + 5 mm or 0.2 in)");
+  cmd->add_option("--feed", o->feed, "cutting feed, e.g. 100ipm or 2500mm/min")->required();
+  cmd->add_option("--plunge-feed", o->plungeFeed, "feed of the entries (default: half --feed)");
+  cmd->add_option("--tolerance", o->tolerance, "arc fitting tolerance (default 0.002 mm)");
+  cmd->add_option("--units", o->units, "program units: mm or in (default: the boundary's)")
+      ->check(CLI::IsMember({"mm", "in"}));
+  cmd->add_flag("--conventional", o->conventional,
+                "conventional instead of climb milling (M3 spindle)");
+  cmd->callback([o, &run] { run = [o] { return runPocket(*o); }; });
+}
+
+}  // namespace engage::app
