@@ -12,25 +12,9 @@
 #include <string>
 
 namespace engage::app {
-namespace {
+namespace {}  // namespace
 
-struct PocketCommandOptions {
-  std::string boundary;
-  std::string output;
-  std::string diameter;
-  std::string stepover;
-  std::string depth;
-  std::string stepDown;
-  std::string top = "0";
-  std::string safeZ;
-  std::string feed;
-  std::string plungeFeed;
-  std::string tolerance;
-  std::string units;
-  bool conventional = false;
-};
-
-int runPocket(const PocketCommandOptions& c) {
+PocketProgram makePocketProgram(const PocketCommandOptions& c) {
   const Toolpath boundary = readProgram(c.boundary);
   const UnitSystem sys = c.units == "in"   ? UnitSystem::Inch
                          : c.units == "mm" ? UnitSystem::Metric
@@ -54,17 +38,25 @@ int runPocket(const PocketCommandOptions& c) {
   if (!c.tolerance.empty()) o.tolerance = length(c.tolerance, "--tolerance");
   o.climb = !c.conventional;
   o.inch = sys == UnitSystem::Inch;
-  // Everything is made before the file is written.
   const std::vector<Loop> loops = boundaryLoops(boundary);
   const std::vector<Ring> rings = pocketRings(loops, o);
-  std::size_t arcs = 0, lines = 0;
-  int levels = 0;
+  PocketProgram p;
   for (const Ring& r : rings) {
-    levels = std::max(levels, r.level + 1);
+    p.levels = std::max(p.levels, r.level + 1);
     for (const Element& e : r.elements)
-      (e.arc ? arcs : lines) += 1;
+      (e.arc ? p.arcs : p.lines) += 1;
+    // Sharp corners of neighbouring rings more than r sqrt 2 apart leave material between.
+    for (std::size_t i = 0; i < r.elements.size(); ++i) {
+      const Element& a = r.elements[i];
+      const Element& b = r.elements[(i + 1) % r.elements.size()];
+      if (a.arc || b.arc) continue;
+      const Eigen::Vector2d u = (a.end - a.start).normalized(), v = (b.end - b.start).normalized();
+      if (u.dot(v) < 0.99) p.sharpCorners = true;
+    }
   }
-  const std::string program = writePocketProgram(
+  p.rings = rings.size();
+  p.cornerWarning = p.sharpCorners && o.stepover > std::sqrt(2.0) * o.toolRadius;
+  p.text = writePocketProgram(
       rings, o,
       {"engage pocket " + std::filesystem::path(c.boundary).filename().string() +
            ": contour-parallel, inside out",
@@ -73,12 +65,25 @@ int runPocket(const PocketCommandOptions& c) {
            formatQuantity(o.depth, Dimension::Length, sys) + " from Z " +
            formatQuantity(o.top, Dimension::Length, sys) + ", feed " +
            formatQuantity(o.feed, Dimension::Feed, sys) + ", " +
-           (o.climb ? "climb" : "conventional")});
+           (o.climb ? "climb" : "conventional")},
+      &p.ringLines);
+  return p;
+}
+
+namespace {
+
+int runPocket(const PocketCommandOptions& c) {
+  // Everything is made before the file is written.
+  const PocketProgram p = makePocketProgram(c);
   const std::filesystem::path parent = std::filesystem::path(c.output).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);
-  writeAtomically(c.output, program);
-  std::printf("%zu rings on %d level(s): %zu arcs, %zu lines; wrote %s\n", rings.size(), levels,
-              arcs, lines, c.output.c_str());
+  writeAtomically(c.output, p.text);
+  std::printf("%zu rings on %d level(s): %zu arcs, %zu lines; wrote %s\n", p.rings, p.levels,
+              p.arcs, p.lines, c.output.c_str());
+  if (p.cornerWarning)
+    std::printf(
+        "warning: stepover above r sqrt 2: the rings' sharp corners leave material between "
+        "them\n");
   return 0;
 }
 

@@ -30,32 +30,6 @@
 namespace engage::app {
 namespace {
 
-struct SimulateOptions {
-  std::string program;
-  ToolOptions tool;
-  std::string stock;
-  std::string voxel;
-  std::string step;
-  std::string stepover;
-  std::string depth;
-  std::string out = "out";
-  std::string units;
-  std::string toolTable;
-  bool quiet = false;
-  // schedule only
-  bool schedule = false;
-  std::string targetMrr = "auto";
-  std::string feedMin;
-  std::string feedMax;
-  std::string airFeed;
-  std::string accel;
-  std::string minChange = "0.05";
-  std::string minSegment;
-  std::string forceLimit;
-  std::string specificEnergy;
-  std::string spindle;
-  std::string model = "measured";
-};
 
 VoxelStock makeStock(const std::string& spec, double voxel, UnitSystem sys) {
   if (spec.rfind("box:", 0) == 0) {
@@ -79,7 +53,17 @@ const char* sideName(PathSide s) {
   return s == PathSide::Concave ? "concave" : s == PathSide::Convex ? "convex" : "straight";
 }
 
-int runSimulate(const SimulateOptions& o) {
+/// printf into a string.
+template <typename... Args>
+void appendf(std::string& out, const char* format, Args... args) {
+  char buf[1024];
+  std::snprintf(buf, sizeof buf, format, args...);
+  out += buf;
+}
+
+}  // namespace
+
+SimulateOutcome runSimulateJob(const SimulateOptions& o) {
   // Everything that can be checked is checked before any work and before any output.
   ReaderOptions ro;
   ro.toolTable = o.toolTable;
@@ -172,7 +156,7 @@ int runSimulate(const SimulateOptions& o) {
       const auto now = std::chrono::steady_clock::now();
       if (done < total && now - last < std::chrono::milliseconds(200)) return;
       last = now;
-      std::fprintf(stderr, "\rsimulate: %zu / %zu steps (%.0f %%)", done, total,
+      std::fprintf(stderr, "\r%s: %zu / %zu steps (%.0f %%)", o.progressLabel.c_str(), done, total,
                    100.0 * static_cast<double>(done) / static_cast<double>(total));
       if (done == total) std::fprintf(stderr, "\n");
     };
@@ -352,26 +336,27 @@ int runSimulate(const SimulateOptions& o) {
   stock.writeStockVdb((dir / "stock.vdb").string());
   const std::size_t open = stock.writeStl((dir / "stock.stl").string());
 
-  std::printf("%zu moves, %zu steps in %.2f s (%.0f steps/s)\n", path.moves.size(), r.steps.size(),
+  std::string report;
+  appendf(report, "%zu moves, %zu steps in %.2f s (%.0f steps/s)\n", path.moves.size(), r.steps.size(),
               r.seconds, j["steps_per_second"].get<double>());
-  std::printf(
+  appendf(report, 
       "removed %s (stock %s -> %s), peak MRR %s at line %d\n",
       formatQuantity(r.removed, Dimension::Volume, sys).c_str(),
       formatQuantity(r.volumeBefore, Dimension::Volume, sys).c_str(),
       formatQuantity(r.volumeAfter, Dimension::Volume, sys).c_str(),
       r.steps.empty() ? "0" : formatQuantity(r.steps[peak].mrr, Dimension::VolumeRate, sys).c_str(),
       r.steps.empty() ? 0 : r.steps[peak].line);
-  std::printf(
+  appendf(report, 
       "measured vs analytic (exact) on steady steps: straight %zu steps mean %.2f %%, concave %zu "
       "mean %.2f %%, convex %zu mean %.2f %%\n",
       r.straight.steps, 100 * r.straight.meanRelative, r.concave.steps,
       100 * r.concave.meanRelative, r.convex.steps, 100 * r.convex.meanRelative);
   if (r.rapidRemoved > 0.0)
-    std::printf("warning: rapids removed %s of material (a crash on a machine)\n",
+    appendf(report, "warning: rapids removed %s of material (a crash on a machine)\n",
                 formatQuantity(r.rapidRemoved, Dimension::Volume, sys).c_str());
-  if (open > 0) std::printf("warning: stock.stl has %zu open edges\n", open);
+  if (open > 0) appendf(report, "warning: stock.stl has %zu open edges\n", open);
   if (o.schedule)
-    std::printf(
+    appendf(report, 
         "schedule: target %s, feed time %.1f s -> %.1f s (%.1f %% saved), largest acceleration %s, "
         "%zu feed pieces\n",
         formatQuantity(plan.targetMrr, Dimension::VolumeRate, sys).c_str(), plan.timeBefore,
@@ -380,14 +365,24 @@ int runSimulate(const SimulateOptions& o) {
         formatQuantity(plan.maxAcceleration, Dimension::Acceleration, sys).c_str(), plan.fWords);
   const std::string programName =
       o.schedule ? "," + std::filesystem::path(o.program).filename().string() : "";
-  std::printf("wrote %s/{steps.csv,summary.json,removed.vdb,stock.vdb,stock.stl%s%s}\n",
+  appendf(report, "wrote %s/{steps.csv,summary.json,removed.vdb,stock.vdb,stock.stl%s%s}\n",
               o.out.c_str(), programName.c_str(), plotted.c_str());
-  return 0;
+  SimulateOutcome outcome;
+  outcome.path = path;
+  outcome.sim = r;
+  outcome.plan = plan;
+  outcome.units = sys;
+  outcome.cutter = cutter;
+  outcome.report = report;
+  return outcome;
 }
 
-}  // namespace
-
 namespace {
+
+int runSimulate(const SimulateOptions& o) {
+  std::fputs(runSimulateJob(o).report.c_str(), stdout);
+  return 0;
+}
 
 CLI::App* addCommon(CLI::App& app, const char* name, const char* help, SimulateOptions& o) {
   CLI::App* cmd = app.add_subcommand(name, help);

@@ -6,6 +6,7 @@
 
 #include "apps/AnalyzeCommand.h"
 #include "apps/MovesCommand.h"
+#include "apps/PaperCommand.h"
 #include "apps/PocketCommand.h"
 #include "apps/SimulateCommand.h"
 #include "cutters/Error.h"
@@ -27,6 +28,7 @@ int main(int argc, char** argv) {
   engage::app::addMovesCommand(app, run);
   engage::app::addSimulateCommand(app, run);
   engage::app::addPocketCommand(app, run);
+  engage::app::addPaperCommand(app, run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -825,7 +825,8 @@ double levelZ(const PocketOptions& o, int level) {
 }
 
 std::string writePocketProgram(const std::vector<Ring>& rings, const PocketOptions& o,
-                               const std::vector<std::string>& comments) {
+                               const std::vector<std::string>& comments,
+                               std::vector<int>* ringLines) {
   if (!(o.safeZ > o.top)) throw ParameterError("safe Z must be above the stock top");
   positive(o.feed, "feed");
   positive(o.plungeFeed, "plunge feed");
@@ -877,6 +878,10 @@ std::string writePocketProgram(const std::vector<Ring>& rings, const PocketOptio
       g << "G1 X" << num(s.x()) << " Y" << num(s.y()) << feedWord(o.feed) << "\n";
     }
     retracted = false;
+    if (ringLines) {
+      const std::string sofar = g.str();
+      ringLines->push_back(1 + static_cast<int>(std::count(sofar.begin(), sofar.end(), '\n')));
+    }
     for (const Element& e : r.elements) {
       if (e.arc) {
         g << (e.ccw ? "G3" : "G2") << " X" << num(e.end.x()) << " Y" << num(e.end.y()) << " I"

@@ -77,7 +77,9 @@ std::vector<Ring> pocketRings(const std::vector<Loop>& boundary, const PocketOpt
 /// The whole program as G-code text: header comments (`comments`, one per line), units,
 /// the rings with their links (a straight feed move where the next ring starts within two
 /// stepovers and the link stays inside the pocket, else retract, rapid and plunge), M2.
+/// `ringLines`, when given, receives the 1-based program line of each ring's first element.
 std::string writePocketProgram(const std::vector<Ring>& rings, const PocketOptions& options,
-                               const std::vector<std::string>& comments);
+                               const std::vector<std::string>& comments,
+                               std::vector<int>* ringLines = nullptr);
 
 }  // namespace engage

@@ -14,7 +14,74 @@ std::string quoted(const std::string& s) {
   return "\"" + s + "\"";
 }
 
+/// The commands that draw one plot as PNG and SVG into temporary names; adds the file names.
+std::string bothFormats(const std::string& name, const std::string& body,
+                        std::vector<std::string>& files) {
+  std::string script;
+  for (const char* fmt : {"png", "svg"}) {
+    const std::string file = name + "." + fmt;
+    script +=
+        std::string(fmt[0] == 'p' ? "set terminal pngcairo size 1400,700 font ',11'\n"
+                                  : "set terminal svg size 1400,700 dynamic font 'sans,11'\n") +
+        "set output " + quoted(file + ".part") + "\n" + body + "unset output\n";
+    files.push_back(file);
+  }
+  return script;
+}
+
+/// Run gnuplot on `script` in `dir`, then give the plots their names.
+void runGnuplot(const std::filesystem::path& dir, const std::string& scriptName,
+                const std::string& script, std::vector<std::string>& files) {
+  const std::filesystem::path scriptFile = dir / scriptName;
+  {
+    std::ofstream f(scriptFile);
+    if (!f) throw Error("cannot write '" + scriptFile.string() + "'");
+    f << script;
+  }
+  const std::string log = scriptName + ".log";
+  const std::string command =
+      "cd " + quoted(dir.string()) + " && gnuplot " + quoted(scriptName) + " 2> " + quoted(log);
+  const int rc = std::system(command.c_str());
+  if (rc != 0)
+    throw Error("gnuplot failed (is Debian's gnuplot-nox installed?); see " + (dir / log).string());
+  for (const std::string& file : files)
+    std::filesystem::rename(dir / (file + ".part"), dir / file);
+  std::filesystem::remove(dir / log);
+  files.push_back(scriptName);
+}
+
 }  // namespace
+
+std::vector<std::string> drawCharts(const std::string& folder, const std::vector<Chart>& charts,
+                                    const std::string& scriptName) {
+  std::vector<std::string> files;
+  std::string script =
+      "set datafile separator ','\nset datafile columnheaders\nset grid\nset key outside top "
+      "center horizontal\n";
+  for (const Chart& c : charts) {
+    std::string body =
+        "set title " + quoted(c.title) + "\nset xlabel " + quoted(c.xlabel) + "\nset ylabel " +
+        quoted(c.ylabel) + "\n" +
+        (c.logX ? "set logscale x\nset autoscale xfix\n" : "unset logscale x\nset autoscale x\n") +
+        "plot ";
+    bool first = true;
+    for (const Series& s : c.series) {
+      body += std::string(first ? "" : ", ") + quoted(s.file) + " using (column(" + quoted(s.x) +
+              ")):(column(" + quoted(s.y) + ")) with " + s.style + " title " + quoted(s.title);
+      first = false;
+    }
+    for (const auto& [value, title] : c.lines) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.6g", value);
+      body +=
+          std::string(first ? "" : ", ") + buf + " with lines lw 2 lc 'red' title " + quoted(title);
+      first = false;
+    }
+    script += bothFormats(c.name, body + "\n", files);
+  }
+  runGnuplot(folder, scriptName, script, files);
+  return files;
+}
 
 std::vector<std::string> writePlots(const PlotSpec& p) {
   const std::filesystem::path dir(p.folder);
@@ -23,16 +90,8 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
   std::string script =
       "set datafile separator ','\nset datafile columnheaders\nset grid\nset key outside top "
       "center horizontal\n";
-  // One plot in two formats; each written to a temporary name first.
   auto plot = [&](const std::string& name, const std::string& body) {
-    for (const char* fmt : {"png", "svg"}) {
-      const std::string file = name + "." + fmt;
-      script +=
-          std::string(fmt[0] == 'p' ? "set terminal pngcairo size 1400,700 font ',11'\n"
-                                    : "set terminal svg size 1400,700 dynamic font 'sans,11'\n") +
-          "set output " + quoted(file + ".part") + "\n" + body + "unset output\n";
-      files.push_back(file);
-    }
+    script += bothFormats(name, body, files);
   };
   const std::string x = "\"arc_length_" + L + "\"";
   std::string mrr =
@@ -70,21 +129,7 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
                       "plot 'steps.csv' using (strcol(\"kind\") eq \"rapid\" ? NaN : column(\"x_" +
                       L + "\")):\"y_" + L + "\":\"mrr_" + Q +
                       "\" with points pt 7 ps 0.4 lc palette notitle\nset size noratio\n");
-  const std::filesystem::path scriptFile = dir / "plots.gp";
-  {
-    std::ofstream f(scriptFile);
-    if (!f) throw Error("cannot write '" + scriptFile.string() + "'");
-    f << script;
-  }
-  const std::string command = "cd " + quoted(dir.string()) + " && gnuplot plots.gp 2> plots.log";
-  const int rc = std::system(command.c_str());
-  if (rc != 0)
-    throw Error("gnuplot failed (is Debian's gnuplot-nox installed?); see " +
-                (dir / "plots.log").string());
-  for (const std::string& file : files)
-    std::filesystem::rename(dir / (file + ".part"), dir / file);
-  std::filesystem::remove(dir / "plots.log");
-  files.push_back("plots.gp");
+  runGnuplot(dir, "plots.gp", script, files);
   return files;
 }
 

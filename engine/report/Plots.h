@@ -26,4 +26,26 @@ struct PlotSpec {
 /// is missing or fails, naming it.
 std::vector<std::string> writePlots(const PlotSpec& spec);
 
+/// One curve of a chart: columns `x` and `y` (header names) of a CSV file in the folder.
+struct Series {
+  std::string file;
+  std::string x, y;
+  std::string title;
+  std::string style = "lines lw 1.5";  ///< gnuplot style, e.g. "lines lw 1 dt 2 lc 1"
+};
+
+/// A chart of curves from CSV files, with optional horizontal lines (value, title).
+struct Chart {
+  std::string name;  ///< file stem: name.png and name.svg
+  std::string title, xlabel, ylabel;
+  std::vector<Series> series;
+  std::vector<std::pair<double, std::string>> lines;
+  bool logX = false;
+};
+
+/// Draw charts from CSV files in `folder` as PNG and SVG (script `script` kept beside them);
+/// returns the files written. Throws Error when gnuplot is missing or fails.
+std::vector<std::string> drawCharts(const std::string& folder, const std::vector<Chart>& charts,
+                                    const std::string& script);
+
 }  // namespace engage
