@@ -5,6 +5,7 @@
 /// 3 internal error.
 
 #include "apps/AnalyzeCommand.h"
+#include "apps/BatchCommand.h"
 #include "apps/MovesCommand.h"
 #include "apps/PaperCommand.h"
 #include "apps/PocketCommand.h"
@@ -29,6 +30,7 @@ int main(int argc, char** argv) {
   engage::app::addSimulateCommand(app, run);
   engage::app::addPocketCommand(app, run);
   engage::app::addPaperCommand(app, run);
+  engage::app::addBatchCommands(app, run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

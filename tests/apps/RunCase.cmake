@@ -14,9 +14,11 @@ function(require_lines name what text)
 endfunction()
 
 file(STRINGS ${CASE}/args args)
-# @DATA@ in the arguments stands for the repository's data/ folder, @OUT@ for a fresh
+# @DATA@ in the arguments stands for the repository's data/ folder, @SOURCE@ for the
+# repository, @OUT@ for a fresh
 # output folder of this case.
 string(REPLACE "@DATA@" "${DATA}" args "${args}")
+string(REPLACE "@SOURCE@" "${DATA}/.." args "${args}")
 string(REPLACE "@OUT@" "${OUT}" args "${args}")
 file(REMOVE_RECURSE ${OUT})
 file(READ ${CASE}/exit expected_exit)

@@ -1,0 +1,65 @@
+# engage batch: (1) shards 0/3, 1/3, 2/3 merged give exactly the results of the whole batch
+# run at once (every column of batch.csv but the run time); (2) a batch interrupted halfway
+# (one job's record missing, another job left half-written) reruns only those two jobs.
+cmake_minimum_required(VERSION 3.22)
+
+function(run)
+  execute_process(COMMAND ${ENGAGE} ${ARGN} --quiet RESULT_VARIABLE rc OUTPUT_VARIABLE out
+                  ERROR_VARIABLE err)
+  set(rc ${rc} PARENT_SCOPE)
+  set(out "${out}${err}" PARENT_SCOPE)
+endfunction()
+
+# batch.csv without its run_time_s column (the 6th), the one thing that may differ.
+function(results file var)
+  file(STRINGS ${file} lines)
+  set(kept "")
+  foreach(line ${lines})
+    string(REGEX REPLACE "^([^,]*,[^,]*,[^,]*,[^,]*,[^,]*,)[^,]*," "\\1" line "${line}")
+    string(APPEND kept "${line}\n")
+  endforeach()
+  set(${var} "${kept}" PARENT_SCOPE)
+endfunction()
+
+file(REMOVE_RECURSE ${OUT})
+run(batch ${MANIFEST} --out ${OUT}/whole)
+if(NOT rc EQUAL 1)  # the manifest holds one broken program
+  message(FATAL_ERROR "whole batch: exit ${rc}, expected 1:\n${out}")
+endif()
+foreach(i 0 1 2)
+  run(batch ${MANIFEST} --out ${OUT}/sharded --shard ${i}/3)
+  if(NOT out MATCHES "shard ${i}/3: [12] jobs")
+    message(FATAL_ERROR "shard ${i}/3 ran the wrong jobs:\n${out}")
+  endif()
+endforeach()
+run(merge ${MANIFEST} --out ${OUT}/sharded)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "merge failed:\n${out}")
+endif()
+results(${OUT}/whole/batch.csv whole)
+results(${OUT}/sharded/batch.csv sharded)
+if(NOT whole STREQUAL sharded)
+  message(FATAL_ERROR "sharded results differ from the whole batch's:\n${whole}\n---\n${sharded}")
+endif()
+
+# Interrupt: drop one job's record, leave another half-written (.partial, no record).
+file(REMOVE ${OUT}/whole/jobs/grbl_engrave/job.json)
+file(RENAME ${OUT}/whole/jobs/inch_helix ${OUT}/whole/jobs/inch_helix.partial)
+file(REMOVE ${OUT}/whole/jobs/inch_helix.partial/job.json)
+run(batch ${MANIFEST} --out ${OUT}/whole)
+if(NOT out MATCHES "5 jobs: 2 run \\(0 failed\\), 3 already done")
+  message(FATAL_ERROR "the rerun did not run exactly the two missing jobs:\n${out}")
+endif()
+if(EXISTS ${OUT}/whole/jobs/inch_helix.partial)
+  message(FATAL_ERROR "the rerun left inch_helix.partial behind")
+endif()
+results(${OUT}/whole/batch.csv rerun)
+if(NOT whole STREQUAL rerun)
+  message(FATAL_ERROR "the resumed batch's results differ:\n${whole}\n---\n${rerun}")
+endif()
+# A merge before every shard has run names the missing jobs and writes nothing.
+run(batch ${MANIFEST} --out ${OUT}/partial --shard 0/2)
+run(merge ${MANIFEST} --out ${OUT}/partial)
+if(rc EQUAL 0 OR EXISTS ${OUT}/partial/batch.csv)
+  message(FATAL_ERROR "merge of an incomplete batch should fail and write nothing")
+endif()
