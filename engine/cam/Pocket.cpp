@@ -518,9 +518,11 @@ std::vector<Element> exactElements(const std::vector<Eigen::Vector2d>& q,
   return out;
 }
 
-/// The ring of one Clipper path, in the cutting direction: climb milling with an M3 spindle
-/// keeps the material on the right, so outer rings (counter-clockwise from Clipper) run
-/// clockwise and island rings (clockwise) run counter-clockwise; conventional the other way.
+/// The ring of one Clipper path, in the cutting direction. With an M3 (clockwise from above)
+/// spindle the tooth on the tool's right moves backwards, with the part's motion relative to
+/// the tool: climb milling keeps the material on the right (G41 side). Clipper's outer rings
+/// run counter-clockwise (the wall outside, on the right) and its island rings clockwise (the
+/// island inside, on the right): climb keeps them, conventional reverses them.
 Ring makeRing(const cl::Path& path, double offset, bool island, const std::vector<Loop>& boundary,
               const PocketOptions& o) {
   // Drop Clipper's grid jogs: vertices nearer than a quarter of the tolerance.
@@ -531,7 +533,7 @@ Ring makeRing(const cl::Path& path, double offset, bool island, const std::vecto
   pts.reserve(clean.size());
   for (const cl::IntPoint& q : clean)
     pts.push_back(toMm(q));
-  if (o.climb) std::reverse(pts.begin(), pts.end());
+  if (!o.climb) std::reverse(pts.begin(), pts.end());
   Ring r;
   r.elements = exactElements(pts, boundary, offset, o.tolerance);
   if (r.elements.empty()) r.elements = fitElements(pts, o.tolerance);

@@ -115,8 +115,8 @@ TEST_CASE("pocket: a rectangle gives rectangles at r, r + s, ... cut inside out"
       CHECK((std::abs(el.start.x() - e) < 1e-4 || std::abs(el.start.x() - (50 - e)) < 1e-4));
       CHECK((std::abs(el.start.y() - e) < 1e-4 || std::abs(el.start.y() - (30 - e)) < 1e-4));
     }
-    // Climb milling with an M3 spindle: the walls on the right, clockwise.
-    CHECK(signedArea(rings[i]) < 0);
+    // Climb milling with an M3 spindle: the walls on the right (G41 side), counter-clockwise.
+    CHECK(signedArea(rings[i]) > 0);
   }
   CHECK(rings[1].linked);  // 4 mm to the next ring, inside the pocket
 }
@@ -125,7 +125,7 @@ TEST_CASE("pocket: conventional milling runs the other way", "[cam]") {
   PocketOptions o = options(5, 4);
   o.climb = false;
   for (const Ring& r : pocketRings({rectangle(0, 0, 50, 30)}, o))
-    CHECK(signedArea(r) > 0);
+    CHECK(signedArea(r) < 0);
 }
 
 TEST_CASE("pocket: a circle gives concentric arcs, and the program reads back", "[cam]") {
@@ -170,14 +170,14 @@ TEST_CASE("pocket: every point of the floor is within r of the path", "[cam]") {
       for (double y = 3; y <= 18; y += 0.25)
         REQUIRE(distanceToRings(rings, {x, y}) <= 3.0 + 0.01);
   }
-  SECTION("an island: rings around it, counter-clockwise when climbing") {
+  SECTION("an island: rings around it, clockwise when climbing (the island on the right)") {
     const std::vector<Ring> rings =
         pocketRings({rectangle(-30, -30, 30, 30), circle(0, 0, 7)}, options(3, 4));
     int islands = 0;
     for (const Ring& r : rings)
       if (r.island) {
         ++islands;
-        CHECK(signedArea(r) > 0);
+        CHECK(signedArea(r) < 0);
         for (const Element& e : r.elements)
           CHECK(e.arc);
       }
