@@ -24,12 +24,12 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
 namespace engage::app {
 namespace {
-
 
 VoxelStock makeStock(const std::string& spec, double voxel, UnitSystem sys) {
   if (spec.rfind("box:", 0) == 0) {
@@ -97,6 +97,9 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
     sched.airFeed = feedOption(o.airFeed, "--air-feed");
     if (!o.accel.empty())
       sched.acceleration = parseQuantity(o.accel, Dimension::Acceleration, sys, "--accel").value;
+    if (!o.jerk.empty()) sched.jerk = parseQuantity(o.jerk, Dimension::Jerk, sys, "--jerk").value;
+    if (!o.rapidFeed.empty())
+      sched.rapidFeed = parseQuantity(o.rapidFeed, Dimension::Feed, sys, "--rapid-feed").value;
     try {
       sched.minChange = std::stod(o.minChange);
     } catch (const std::exception&) {
@@ -121,8 +124,17 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
           parseQuantity(o.spindle, Dimension::SpindleSpeed, sys, "--spindle").value);
     }
   }
-  VoxelStock stock = makeStock(o.stock, voxel, sys);
-  {
+  // Without a stock (schedule --model analytic only) the steps carry the analytic model
+  // alone, as in the paper.
+  const bool noStock = o.stock.empty();
+  if (noStock && !(o.schedule && o.model == "analytic"))
+    throw ParameterError("--stock is required (only schedule --model analytic runs without one)");
+  if (!noStock && !o.materialSide.empty())
+    throw ParameterError("--material-side applies without --stock (the stock tells the side)");
+  std::optional<VoxelStock> stockStore;
+  if (!noStock) stockStore.emplace(makeStock(o.stock, voxel, sys));
+  if (!noStock) {
+    VoxelStock& stock = *stockStore;
     // Does the cutter ever meet the stock?
     const Box3 sb = stock.bounds();
     bool meets = false;
@@ -146,8 +158,8 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
                            formatQuantity(sb.max.x(), Dimension::Length, sys) + ", " +
                            formatQuantity(sb.max.y(), Dimension::Length, sys) + ", " +
                            formatQuantity(sb.max.z(), Dimension::Length, sys) + ")");
+    stock.captureRemoved(true);
   }
-  stock.captureRemoved(true);
 
   const bool tty = isatty(2) && !o.quiet;
   auto last = std::chrono::steady_clock::now();
@@ -160,7 +172,8 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
                    100.0 * static_cast<double>(done) / static_cast<double>(total));
       if (done == total) std::fprintf(stderr, "\n");
     };
-  const SimulationResult r = simulate(path, cutter, stock, so);
+  const SimulationResult r = noStock ? analyticSteps(path, cutter, so, o.materialSide != "left")
+                                     : simulate(path, cutter, *stockStore, so);
   // The schedule and the re-fed program are made before any output is written.
   Schedule plan;
   std::string refed;
@@ -286,12 +299,14 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
     std::size_t cutting = 0;
     for (std::size_t i = 0; i < r.steps.size(); ++i) {
       const StepRecord& s = r.steps[i];
-      if (s.kind == MoveKind::Rapid || s.mrr <= 0.0 || plan.binding[i] == Binding::Air) continue;
+      // Without a stock the statistics are the analytic model's.
+      const double load = noStock ? s.mrrExact : s.mrr;
+      if (s.kind == MoveKind::Rapid || !(load > 0.0) || plan.binding[i] == Binding::Air) continue;
       // The removal per unit length does not depend on the feed: the MRR scales with it.
-      const double after = s.mrr * plan.feed[i] / s.feed;
-      mrrBefore += s.mrr;
+      const double after = load * plan.feed[i] / s.feed;
+      mrrBefore += load;
       meanAfter += after;
-      peakBefore = std::max(peakBefore, s.mrr);
+      peakBefore = std::max(peakBefore, load);
       peakAfter = std::max(peakAfter, after);
       ++cutting;
     }
@@ -300,8 +315,13 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
         {"target_mrr", toDisplay(plan.targetMrr, Dimension::VolumeRate, sys)},
         {"acceleration_limit", num(toDisplay(sched.acceleration, Dimension::Acceleration, sys))},
         {"max_acceleration", toDisplay(plan.maxAcceleration, Dimension::Acceleration, sys)},
+        {"jerk_limit", num(toDisplay(sched.jerk, Dimension::Jerk, sys))},
         {"feed_time_before_s", plan.timeBefore},
         {"feed_time_after_s", plan.timeAfter},
+        {"rapid_feed", num(toDisplay(sched.rapidFeed, Dimension::Feed, sys))},
+        {"rapid_time_s", plan.rapidTime},
+        {"cycle_time_before_s", plan.timeBefore + plan.rapidTime},
+        {"cycle_time_after_s", plan.timeAfter + plan.rapidTime},
         {"saving_relative", plan.timeBefore > 0 ? 1.0 - plan.timeAfter / plan.timeBefore : 0.0},
         {"mrr_mean_before", toDisplay(mrrBefore / n, Dimension::VolumeRate, sys)},
         {"mrr_mean_after", toDisplay(meanAfter / n, Dimension::VolumeRate, sys)},
@@ -332,41 +352,59 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
   } catch (const Error& e) {
     std::fprintf(stderr, "engage: warning: plots not drawn: %s\n", e.what());
   }
-  stock.writeRemovedVdb((dir / "removed.vdb").string());
-  stock.writeStockVdb((dir / "stock.vdb").string());
-  const std::size_t open = stock.writeStl((dir / "stock.stl").string());
+  std::size_t open = 0;
+  if (!noStock) {
+    stockStore->writeRemovedVdb((dir / "removed.vdb").string());
+    stockStore->writeStockVdb((dir / "stock.vdb").string());
+    open = stockStore->writeStl((dir / "stock.stl").string());
+  }
 
   std::string report;
-  appendf(report, "%zu moves, %zu steps in %.2f s (%.0f steps/s)\n", path.moves.size(), r.steps.size(),
-              r.seconds, j["steps_per_second"].get<double>());
-  appendf(report, 
-      "removed %s (stock %s -> %s), peak MRR %s at line %d\n",
-      formatQuantity(r.removed, Dimension::Volume, sys).c_str(),
-      formatQuantity(r.volumeBefore, Dimension::Volume, sys).c_str(),
-      formatQuantity(r.volumeAfter, Dimension::Volume, sys).c_str(),
-      r.steps.empty() ? "0" : formatQuantity(r.steps[peak].mrr, Dimension::VolumeRate, sys).c_str(),
-      r.steps.empty() ? 0 : r.steps[peak].line);
-  appendf(report, 
-      "measured vs analytic (exact) on steady steps: straight %zu steps mean %.2f %%, concave %zu "
-      "mean %.2f %%, convex %zu mean %.2f %%\n",
-      r.straight.steps, 100 * r.straight.meanRelative, r.concave.steps,
-      100 * r.concave.meanRelative, r.convex.steps, 100 * r.convex.meanRelative);
+  appendf(report, "%zu moves, %zu steps in %.2f s (%.0f steps/s)\n", path.moves.size(),
+          r.steps.size(), r.seconds, j["steps_per_second"].get<double>());
+  if (noStock)
+    appendf(report,
+            "no stock: every feed step cut at stepover %s and depth %s, the stock on the %s of "
+            "the path (the paper's analytic model)\n",
+            formatQuantity(*so.stepover, Dimension::Length, sys).c_str(),
+            formatQuantity(*so.depth, Dimension::Length, sys).c_str(),
+            o.materialSide == "left" ? "left" : "right");
+  else {
+    appendf(report, "removed %s (stock %s -> %s), peak MRR %s at line %d\n",
+            formatQuantity(r.removed, Dimension::Volume, sys).c_str(),
+            formatQuantity(r.volumeBefore, Dimension::Volume, sys).c_str(),
+            formatQuantity(r.volumeAfter, Dimension::Volume, sys).c_str(),
+            r.steps.empty() ? "0"
+                            : formatQuantity(r.steps[peak].mrr, Dimension::VolumeRate, sys).c_str(),
+            r.steps.empty() ? 0 : r.steps[peak].line);
+    appendf(report,
+            "measured vs analytic (exact) on steady steps: straight %zu steps mean %.2f %%, "
+            "concave %zu "
+            "mean %.2f %%, convex %zu mean %.2f %%\n",
+            r.straight.steps, 100 * r.straight.meanRelative, r.concave.steps,
+            100 * r.concave.meanRelative, r.convex.steps, 100 * r.convex.meanRelative);
+  }
   if (r.rapidRemoved > 0.0)
     appendf(report, "warning: rapids removed %s of material (a crash on a machine)\n",
-                formatQuantity(r.rapidRemoved, Dimension::Volume, sys).c_str());
+            formatQuantity(r.rapidRemoved, Dimension::Volume, sys).c_str());
   if (open > 0) appendf(report, "warning: stock.stl has %zu open edges\n", open);
   if (o.schedule)
-    appendf(report, 
-        "schedule: target %s, feed time %.1f s -> %.1f s (%.1f %% saved), largest acceleration %s, "
+    appendf(
+        report,
+        "schedule: target %s, feed time %.1f s -> %.1f s (%.1f %% %s), largest acceleration %s, "
         "%zu feed pieces\n",
         formatQuantity(plan.targetMrr, Dimension::VolumeRate, sys).c_str(), plan.timeBefore,
         plan.timeAfter,
-        plan.timeBefore > 0 ? 100.0 * (1.0 - plan.timeAfter / plan.timeBefore) : 0.0,
+        plan.timeBefore > 0 ? std::abs(100.0 * (1.0 - plan.timeAfter / plan.timeBefore)) : 0.0,
+        plan.timeAfter <= plan.timeBefore ? "saved" : "longer",
         formatQuantity(plan.maxAcceleration, Dimension::Acceleration, sys).c_str(), plan.fWords);
+  if (o.schedule && plan.rapidTime > 0.0)
+    appendf(report, "cycle time with rapids: %.1f s -> %.1f s (rapids %.1f s)\n",
+            plan.timeBefore + plan.rapidTime, plan.timeAfter + plan.rapidTime, plan.rapidTime);
   const std::string programName =
       o.schedule ? "," + std::filesystem::path(o.program).filename().string() : "";
-  appendf(report, "wrote %s/{steps.csv,summary.json,removed.vdb,stock.vdb,stock.stl%s%s}\n",
-              o.out.c_str(), programName.c_str(), plotted.c_str());
+  appendf(report, "wrote %s/{steps.csv,summary.json%s%s%s}\n", o.out.c_str(),
+          noStock ? "" : ",removed.vdb,stock.vdb,stock.stl", programName.c_str(), plotted.c_str());
   SimulateOutcome outcome;
   outcome.path = path;
   outcome.sim = r;
@@ -389,8 +427,8 @@ CLI::App* addCommon(CLI::App& app, const char* name, const char* help, SimulateO
   cmd->add_option("program", o.program, "G-code program")->required();
   addToolOptions(*cmd, o.tool, true);
   cmd->add_option("--stock", o.stock,
-                  "box:X0,Y0,Z0,X1,Y1,Z1 (program units) or a closed STL/OBJ/PLY mesh (mm)")
-      ->required();
+                  "box:X0,Y0,Z0,X1,Y1,Z1 (program units) or a closed STL/OBJ/PLY mesh (mm); "
+                  "schedule --model analytic runs without one");
   cmd->add_option("--voxel", o.voxel, "voxel size (default: cutter diameter / 20)");
   cmd->add_option("--step", o.step, "longest step (default: 2.5 voxels)");
   cmd->add_option("--stepover", o.stepover,
@@ -428,6 +466,10 @@ void addSimulateCommand(CLI::App& app, std::function<int()>& run) {
                  "highest feed to command (default: twice the programmed)");
   sc->add_option("--air-feed", so->airFeed, "feed where nothing is cut (default: the programmed)");
   sc->add_option("--accel", so->accel, "tangential acceleration limit, e.g. 2000mm/s2 or 0.3g");
+  sc->add_option("--jerk", so->jerk,
+                 "jerk limit, e.g. 50000mm/s3: room for the controller's S-curves");
+  sc->add_option("--rapid-feed", so->rapidFeed,
+                 "the machine's rapid feed, to time rapids in the cycle time, e.g. 15000mm/min");
   sc->add_option("--min-change", so->minChange, "relative step between F levels")
       ->capture_default_str();
   sc->add_option("--min-segment", so->minSegment, "shortest run of one feed along the path");
@@ -435,6 +477,9 @@ void addSimulateCommand(CLI::App& app, std::function<int()>& run) {
                  "tangential force to hold instead of an MRR (with --specific-energy, --spindle)");
   sc->add_option("--specific-energy", so->specificEnergy, "specific cutting energy, e.g. 0.7J/mm3");
   sc->add_option("--spindle", so->spindle, "spindle speed, e.g. 12000rpm");
+  sc->add_option("--material-side", so->materialSide,
+                 "without --stock: the stock's side of the path (default right: climb, M3)")
+      ->check(CLI::IsMember({"right", "left"}));
   sc->add_option("--model", so->model, "schedule from the measured MRR or the analytic model")
       ->check(CLI::IsMember({"measured", "analytic"}))
       ->capture_default_str();

@@ -35,12 +35,16 @@ struct SimulateOptions {
   std::string feedMax;
   std::string airFeed;
   std::string accel;
+  std::string jerk;
+  std::string rapidFeed;
   std::string minChange = "0.05";
   std::string minSegment;
   std::string forceLimit;
   std::string specificEnergy;
   std::string spindle;
   std::string model = "measured";
+  /// Without a stock: the side of the path the stock is on, "right" (climb with M3) or "left".
+  std::string materialSide;
   /// Prefix of the progress line on a terminal.
   std::string progressLabel = "simulate";
 };

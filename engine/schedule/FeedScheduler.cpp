@@ -37,12 +37,69 @@ void limitAcceleration(const SimulationResult& sim, std::vector<double>& feed, d
   }
 }
 
+/// The highest speed (mm/s) reachable from v0 within `distance` (mm) under changeDistance.
+double reachable(double v0, double vWanted, double distance, double a, double j) {
+  if (changeDistance(v0, vWanted, a, j) <= distance) return vWanted;
+  double lo = v0, hi = vWanted;
+  for (int k = 0; k < 50; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (changeDistance(v0, mid, a, j) <= distance ? lo : hi) = mid;
+  }
+  return lo;
+}
+
+/// With a jerk limit a change of feed is not local: every pair of feed steps i < k on one
+/// run of feed moves must leave room for the controller's S-curve between their feeds. A
+/// forward pass lowers feeds that rise too fast after an earlier one, a backward pass lowers
+/// feeds that would have to fall too fast before a later one. Only pairs closer than the
+/// longest change are looked at.
+void limitJerk(const SimulationResult& sim, std::vector<double>& feed, double a, double j) {
+  if (!(j > 0.0)) return;
+  const auto& st = sim.steps;
+  double vMax = 0.0;
+  for (std::size_t i = 0; i < st.size(); ++i)
+    if (isFeedStep(st[i])) vMax = std::max(vMax, feed[i] / 60.0);
+  // No change between feeds up to vMax needs more than vMax T(vMax) (mean speed at most
+  // vMax, T growing with the change).
+  const double window = 2.0 * changeDistance(0.0, vMax, a, j);
+  // Where each run of successive feed steps begins.
+  std::vector<std::size_t> runStart(st.size(), 0);
+  for (std::size_t i = 1; i < st.size(); ++i)
+    runStart[i] = isFeedStep(st[i]) && isFeedStep(st[i - 1]) ? runStart[i - 1] : i;
+  for (std::size_t k = 1; k < st.size(); ++k) {
+    if (!isFeedStep(st[k])) continue;
+    for (std::size_t i = k; i-- > runStart[k];) {
+      const double distance = st[k].arcLength - st[i].arcLength;
+      if (distance > window) break;
+      if (feed[i] < feed[k])
+        feed[k] =
+            std::min(feed[k], 60.0 * reachable(feed[i] / 60.0, feed[k] / 60.0, distance, a, j));
+    }
+  }
+  for (std::size_t i = st.size(); i-- > 0;) {
+    if (!isFeedStep(st[i])) continue;
+    for (std::size_t k = i + 1; k < st.size() && runStart[k] == runStart[i]; ++k) {
+      const double distance = st[k].arcLength - st[i].arcLength;
+      if (distance > window) break;
+      if (feed[k] < feed[i])
+        feed[i] =
+            std::min(feed[i], 60.0 * reachable(feed[k] / 60.0, feed[i] / 60.0, distance, a, j));
+    }
+  }
+}
+
+void limitMotion(const SimulationResult& sim, std::vector<double>& feed, double a, double j) {
+  limitAcceleration(sim, feed, a);
+  limitJerk(sim, feed, a, j);
+}
+
 /// Round feeds down to the levels F (1 + q)^k of the step's programmed feed F (k an integer):
 /// the programmed feed is a level, so unchanged steps keep it, and any two levels of a move
 /// differ by at least the factor 1 + q. Hysteresis: a step keeps the previous step's level
 /// while that is at most q/2 above its own wanted feed, so that the noise of the measured MRR
 /// does not toggle F words. Levels below `floor` are lifted to it.
-void quantizeDown(const SimulationResult& sim, std::vector<double>& feed, double floor, double q) {
+void quantizeDown(const SimulationResult& sim, std::vector<double>& feed, double floor, double q,
+                  bool hysteresis) {
   double previous = 0.0;
   for (std::size_t i = 0; i < feed.size(); ++i) {
     if (!isFeedStep(sim.steps[i])) {
@@ -53,7 +110,7 @@ void quantizeDown(const SimulationResult& sim, std::vector<double>& feed, double
     const double k = std::floor(std::log(feed[i] / base) / std::log1p(q) + 1e-9);
     double level =
         std::max(std::min(feed[i], base * std::pow(1.0 + q, k)), std::min(floor, feed[i]));
-    if (previous > level && previous <= feed[i] * (1.0 + 0.5 * q)) level = previous;
+    if (hysteresis && previous > level && previous <= feed[i] * (1.0 + 0.5 * q)) level = previous;
     feed[i] = level;
     previous = level;
   }
@@ -86,6 +143,43 @@ void mergeShortRuns(const SimulationResult& sim, std::vector<double>& feed, doub
 
 }  // namespace
 
+double changeDistance(double v0, double v1, double a, double j) {
+  // T: a triangle of acceleration when it never reaches a, else a trapezoid; 0 without limits.
+  return 0.5 * (v0 + v1) * changeTime(v1 - v0, a, j);
+}
+
+double changeTime(double dv, double a, double j) {
+  dv = std::abs(dv);
+  if (j > 0.0 && (!(a > 0.0) || dv < a * a / j)) return 2.0 * std::sqrt(dv / j);
+  if (a > 0.0) return dv / a + (j > 0.0 ? a / j : 0.0);
+  return 0.0;
+}
+
+double rapidTime(const Toolpath& path, double rapidFeed, double a, double j) {
+  if (!(rapidFeed > 0.0)) return 0.0;
+  const double v = rapidFeed / 60.0;
+  double t = 0.0;
+  for (const Move& m : path.moves) {
+    if (m.kind != MoveKind::Rapid) continue;
+    const double length = moveLength(m);
+    if (length <= 0.0) continue;
+    // From standstill to standstill: cruise at v if there is room for both changes, else
+    // turn at the highest speed the length allows.
+    const double both = 2.0 * changeDistance(0.0, v, a, j);
+    if (length >= both) {
+      t += 2.0 * changeTime(v, a, j) + (length - both) / v;
+      continue;
+    }
+    double lo = 0.0, hi = v;
+    for (int k = 0; k < 60; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      (2.0 * changeDistance(0.0, mid, a, j) <= length ? lo : hi) = mid;
+    }
+    t += 2.0 * changeTime(lo, a, j);
+  }
+  return t;
+}
+
 const char* bindingName(Binding b) {
   switch (b) {
     case Binding::None:
@@ -113,9 +207,10 @@ double mrrForForce(double force, double specificEnergy, double diameter, double 
   return force * cuttingSpeed(diameter, spindleRpm) / (1000.0 * specificEnergy);
 }
 
-double feedTime(const SimulationResult& sim, const std::vector<double>& feed, double acceleration) {
+double feedTime(const SimulationResult& sim, const std::vector<double>& feed, double acceleration,
+                double jerk) {
   std::vector<double> f = feed;
-  limitAcceleration(sim, f, acceleration);
+  limitMotion(sim, f, acceleration, jerk);
   double t = 0.0;
   const auto& st = sim.steps;
   for (std::size_t i = 0; i < st.size(); ++i) {
@@ -133,15 +228,20 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   Schedule out;
   // Target: given, or the median MRR of the steady straight steps.
   out.targetMrr = o.targetMrr;
+  // The load the schedule holds: the measured MRR, or the analytic one.
+  auto load = [&](const StepRecord& r) {
+    const double m = o.analytic ? r.mrrExact : r.mrr;
+    return std::isfinite(m) ? m : 0.0;
+  };
   if (!(out.targetMrr > 0.0)) {
     std::vector<double> steady;
     for (std::size_t i = 1; i + 1 < st.size(); ++i) {
       const StepRecord &a = st[i - 1], &r = st[i], &b = st[i + 1];
-      if (r.side != PathSide::Straight || !isFeedStep(r) || r.mrr <= 0.0 || a.move != r.move ||
+      if (r.side != PathSide::Straight || !isFeedStep(r) || load(r) <= 0.0 || a.move != r.move ||
           b.move != r.move)
         continue;
-      if (std::abs(a.mrr / r.mrr - 1.0) < 0.02 && std::abs(b.mrr / r.mrr - 1.0) < 0.02)
-        steady.push_back(r.mrr);
+      if (std::abs(load(a) / load(r) - 1.0) < 0.02 && std::abs(load(b) / load(r) - 1.0) < 0.02)
+        steady.push_back(load(r));
     }
     if (steady.empty())
       throw ParameterError(
@@ -161,13 +261,15 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
                          " exceeds --feed-max " +
                          formatQuantity(fMax, Dimension::Feed, UnitSystem::Metric));
   if (!(o.minChange > 0.0)) throw ParameterError("--min-change must be positive");
+  if (o.jerk < 0.0 || o.acceleration < 0.0)
+    throw ParameterError("--accel and --jerk must not be negative");
 
   out.wanted.assign(st.size(), 0.0);
   out.binding.assign(st.size(), Binding::None);
   for (std::size_t i = 0; i < st.size(); ++i) {
     const StepRecord& s = st[i];
     if (!isFeedStep(s)) continue;
-    const double mrr = o.analytic ? (std::isfinite(s.mrrExact) ? s.mrrExact : 0.0) : s.mrr;
+    const double mrr = load(s);
     if (mrr < kAirShare * out.targetMrr) {
       out.wanted[i] = std::clamp(o.airFeed > 0.0 ? o.airFeed : s.feed, fMin, fMax);
       out.binding[i] = Binding::Air;
@@ -210,17 +312,21 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
     }
   };
 
-  // Acceleration, F-word levels, short runs and unsplittable lines, until nothing changes
-  // (each of them only lowers feeds, so this ends).
+  // Acceleration and jerk, F-word levels, short runs and unsplittable lines, until nothing
+  // changes. The levels' hysteresis may lift a feed by up to half a level, which can undo a
+  // motion limit (and the two can settle on lifting and lowering the same feed); so a second
+  // loop repeats the same steps without hysteresis: there every step only lowers feeds, the
+  // levels are discrete, and it ends with every limit met.
   out.feed = out.wanted;
-  for (int round = 0; round < 50; ++round) {
-    const std::vector<double> before = out.feed;
-    limitAcceleration(sim, out.feed, o.acceleration);
-    quantizeDown(sim, out.feed, fMin, o.minChange);
-    mergeShortRuns(sim, out.feed, o.minSegment);
-    unify(out.feed);
-    if (out.feed == before) break;
-  }
+  for (const bool hysteresis : {true, false})
+    for (int round = 0; round < 50 || !hysteresis; ++round) {
+      const std::vector<double> before = out.feed;
+      limitMotion(sim, out.feed, o.acceleration, o.jerk);
+      quantizeDown(sim, out.feed, fMin, o.minChange, hysteresis);
+      mergeShortRuns(sim, out.feed, o.minSegment);
+      unify(out.feed);
+      if (out.feed == before) break;
+    }
   for (std::size_t i = 0; i < st.size(); ++i)
     if (isFeedStep(st[i]) && out.binding[i] == Binding::None &&
         out.feed[i] < out.wanted[i] / (1.0 + o.minChange) - 1e-9)
@@ -252,8 +358,9 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   std::vector<double> programmed(st.size(), 0.0);
   for (std::size_t i = 0; i < st.size(); ++i)
     programmed[i] = st[i].feed;
-  out.timeBefore = feedTime(sim, programmed, o.acceleration);
-  out.timeAfter = feedTime(sim, out.feed, o.acceleration);
+  out.timeBefore = feedTime(sim, programmed, o.acceleration, o.jerk);
+  out.timeAfter = feedTime(sim, out.feed, o.acceleration, o.jerk);
+  out.rapidTime = rapidTime(path, o.rapidFeed, o.acceleration, o.jerk);
   for (std::size_t i = 1; i < st.size(); ++i)
     if (isFeedStep(st[i]) && isFeedStep(st[i - 1])) {
       const double v0 = out.feed[i - 1] / 60.0, v1 = out.feed[i] / 60.0;

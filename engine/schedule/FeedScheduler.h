@@ -26,6 +26,12 @@ struct ScheduleOptions {
   double feedMax = 0.0;       ///< highest (0: 2 x the highest programmed feed)
   double airFeed = 0.0;       ///< feed of steps that cut nothing (0: the programmed feed)
   double acceleration = 0.0;  ///< tangential acceleration limit (0: none)
+  /// Jerk limit, mm/s^3 (0: none): room is left between feeds for the controller's S-curve
+  /// (see changeDistance).
+  double jerk = 0.0;
+  /// The machine's rapid feed, mm/min (0: rapids are not timed); rapids run from standstill
+  /// to standstill under the same acceleration and jerk limits.
+  double rapidFeed = 0.0;
   double minChange = 0.05;    ///< relative step between feed levels
   double minSegment = 0.0;    ///< shortest run of one feed level along the path (0: one step)
   /// Schedule from the analytic model of each step (paper Eq 21-23 through its MRR, with the
@@ -50,6 +56,7 @@ struct Schedule {
   FeedPlan plan;                 ///< per move: the pieces for GcodeWriter
   double timeBefore = 0.0;       ///< feed-move time with the programmed feeds, s
   double timeAfter = 0.0;        ///< with the scheduled feeds, s
+  double rapidTime = 0.0;        ///< rapids at ScheduleOptions::rapidFeed (the same before and after), s
   double maxAcceleration = 0.0;  ///< largest |Eq 24 acceleration| between scheduled steps, mm/s^2
   std::size_t fWords = 0;        ///< feed pieces in the plan
 };
@@ -59,9 +66,25 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
                        const ScheduleOptions& options);
 
 /// Time to run the feed steps with per-step feeds `feed` (mm/min) under an acceleration limit
-/// (mm/s^2, 0: none): each step at its feed, the changes between them at the limit (Eq 24's
-/// time between successive feeds). Seconds.
-double feedTime(const SimulationResult& sim, const std::vector<double>& feed, double acceleration);
+/// (mm/s^2, 0: none) and a jerk limit (mm/s^3, 0: none): each step at its feed, the changes
+/// between them at the limits (Eq 24's time between successive feeds). Seconds.
+double feedTime(const SimulationResult& sim, const std::vector<double>& feed, double acceleration,
+                double jerk = 0.0);
+
+/// The shortest distance (mm) over which a controller limited to acceleration `a` (mm/s^2; 0:
+/// none) and jerk `j` (mm/s^3; 0: none) changes speed from v0 to v1 (mm/s), starting and
+/// ending at zero acceleration. The S-curve is point-symmetric about its middle, so the
+/// distance is the mean speed (v0 + v1)/2 times the time T: T = |dv|/a + a/j when the
+/// acceleration reaches a (|dv| >= a^2/j), else 2 sqrt(|dv|/j); without jerk limit T = |dv|/a
+/// (Eq 24's distance).
+double changeDistance(double v0, double v1, double a, double j);
+
+/// The time of that change, s (0 without limits).
+double changeTime(double dv, double a, double j);
+
+/// Time of the program's rapids at `rapidFeed` (mm/min; 0: none), each from standstill to
+/// standstill under acceleration `a` and jerk `j` (0: none). Seconds.
+double rapidTime(const Toolpath& path, double rapidFeed, double a, double j);
 
 const char* bindingName(Binding b);
 

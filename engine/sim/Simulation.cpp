@@ -44,6 +44,57 @@ double curvatureOf(const Move& m) {
   return r > 0.0 ? (m.turns > 0 ? 1.0 : -1.0) / r : 0.0;
 }
 
+/// A step before it is cut: a piece [t0, t1] of a move.
+struct Planned {
+  std::size_t move;
+  double t0, t1;
+  double length;  ///< of the step, mm (a spline's length is a walk over its points: once)
+};
+
+/// Every move in pieces no longer than L (arcs as arc pieces, never longer than the move).
+std::vector<Planned> planSteps(const Toolpath& path, double L) {
+  std::vector<Planned> plan;
+  for (std::size_t i = 0; i < path.moves.size(); ++i) {
+    const double len = moveLength(path.moves[i]);
+    if (len <= 0.0) continue;
+    const int n = std::max(1, static_cast<int>(std::ceil(len / L - 1e-9)));
+    for (int k = 0; k < n; ++k)
+      plan.push_back({i, static_cast<double>(k) / n, static_cast<double>(k + 1) / n, len / n});
+  }
+  return plan;
+}
+
+void refuseOtherAxes(const Toolpath& path) {
+  for (const Move& m : path.moves)
+    if (m.otherAxes)
+      throw ParameterError(
+          path.files[static_cast<std::size_t>(m.file)] + ":" + std::to_string(m.line) +
+          ": this line moves a rotary or UVW axis; engage simulates 3-axis milling");
+}
+
+/// The analytic model of one feed step at stepover s and depth d (plunges: pi W(d)^2 F, no
+/// paper form); NaN where the model has no steady state.
+void analytic(StepRecord& r, const AptCutter& cutter, const StepPath& sp, double s, double d) {
+  const Eigen::Vector3d travel = sp.end - sp.start;
+  if (travel.head<2>().norm() <= 1e-9 && r.kind == MoveKind::Line) {
+    // A plunge: the cross-section normal to the motion is the cutter's slice where it
+    // enters the material, pi W(depth)^2; the paper has no form for it.
+    const double w = cutter.radiusAt(d);
+    r.mrrExact = travel.z() < 0.0 ? 3.14159265358979323846 * w * w * r.feed : kNaN;
+    r.mrrPaper = kNaN;
+    return;
+  }
+  try {
+    const EngagementModel model(cutter, s, d);
+    PathShape shape;
+    if (r.side != PathSide::Straight) shape = PathShape{r.side, 1.0 / std::abs(r.curvature)};
+    r.mrrExact = model.mrr(r.feed, shape);
+    r.mrrPaper = model.mrrPaper(r.feed, shape);
+  } catch (const ParameterError&) {
+    r.mrrExact = r.mrrPaper = kNaN;  // no steady state (arc tighter than the cutter, ...)
+  }
+}
+
 void accumulate(Agreement& a, double measured, double analytic) {
   if (!(std::isfinite(analytic) && analytic > 0.0)) return;
   const double rel = std::abs(measured / analytic - 1.0);
@@ -60,30 +111,14 @@ void finish(Agreement& a) {
 
 SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelStock& stock,
                           const SimulationOptions& options) {
-  for (const Move& m : path.moves)
-    if (m.otherAxes)
-      throw ParameterError(
-          path.files[static_cast<std::size_t>(m.file)] + ":" + std::to_string(m.line) +
-          ": this line moves a rotary or UVW axis; engage simulates 3-axis milling");
+  refuseOtherAxes(path);
   const double h = stock.voxelSize();
   const double L = options.stepLength > 0.0 ? options.stepLength : 2.5 * h;
   SimulationResult out;
   out.volumeBefore = stock.volume();
 
   // Plan the steps first (for progress and for the records).
-  struct Planned {
-    std::size_t move;
-    double t0, t1;
-    double length;  ///< of the step, mm (a spline's length is a walk over its points: once)
-  };
-  std::vector<Planned> plan;
-  for (std::size_t i = 0; i < path.moves.size(); ++i) {
-    const double len = moveLength(path.moves[i]);
-    if (len <= 0.0) continue;
-    const int n = std::max(1, static_cast<int>(std::ceil(len / L - 1e-9)));
-    for (int k = 0; k < n; ++k)
-      plan.push_back({i, static_cast<double>(k) / n, static_cast<double>(k + 1) / n, len / n});
-  }
+  const std::vector<Planned> plan = planSteps(path, L);
 
   const auto start = std::chrono::steady_clock::now();
   double arc = 0.0;
@@ -128,27 +163,10 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
 
     // The analytic model of this step: its stepover and depth (given or measured).
     r.mrrExact = r.mrrPaper = 0.0;
-    if (m.kind != MoveKind::Rapid && r.removed > kAirVoxels * h * h * h) {
-      const double s = options.stepover.value_or(std::min(r.width, 2.0 * cutter.maxRadius()));
-      const double d = std::min(options.depth.value_or(r.depth), cutter.height());
-      const Eigen::Vector3d travel = sp.end - sp.start;
-      if (travel.head<2>().norm() <= 1e-9 && m.kind == MoveKind::Line) {
-        // A plunge: the cross-section normal to the motion is the cutter's slice where it
-        // enters the material, pi W(depth)^2; the paper has no form for it.
-        const double w = cutter.radiusAt(d);
-        r.mrrExact = travel.z() < 0.0 ? 3.14159265358979323846 * w * w * r.feed : kNaN;
-        r.mrrPaper = kNaN;
-      } else
-        try {
-          const EngagementModel model(cutter, s, d);
-          PathShape shape;
-          if (r.side != PathSide::Straight) shape = PathShape{r.side, 1.0 / std::abs(r.curvature)};
-          r.mrrExact = model.mrr(r.feed, shape);
-          r.mrrPaper = model.mrrPaper(r.feed, shape);
-        } catch (const ParameterError&) {
-          r.mrrExact = r.mrrPaper = kNaN;  // no steady state (arc tighter than the cutter, ...)
-        }
-    }
+    if (m.kind != MoveKind::Rapid && r.removed > kAirVoxels * h * h * h)
+      analytic(r, cutter, sp,
+               options.stepover.value_or(std::min(r.width, 2.0 * cutter.maxRadius())),
+               std::min(options.depth.value_or(r.depth), cutter.height()));
     out.steps.push_back(r);
     if (options.progress && (si % 256 == 0 || si + 1 == plan.size()))
       options.progress(si + 1, plan.size());
@@ -192,6 +210,42 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelSt
                : x.step < y.step;
   });
   if (out.largest.size() > 10) out.largest.resize(10);
+  return out;
+}
+
+SimulationResult analyticSteps(const Toolpath& path, const AptCutter& cutter,
+                               const SimulationOptions& options, bool stockOnRight) {
+  refuseOtherAxes(path);
+  if (!options.stepover || !options.depth)
+    throw ParameterError("the analytic model without a stock needs --stepover and --depth");
+  const double L = options.stepLength > 0.0 ? options.stepLength : 2.0 * cutter.radius() / 10.0;
+  const double d = std::min(*options.depth, cutter.height());
+  SimulationResult out;
+  out.volumeBefore = out.volumeAfter = kNaN;
+  double arc = 0.0;
+  for (const Planned& p : planSteps(path, L)) {
+    const Move& m = path.moves[p.move];
+    const StepPath sp = stepPath(m, p.t0, p.t1);
+    StepRecord r;
+    r.move = p.move;
+    r.line = m.line;
+    r.kind = m.kind;
+    r.length = p.length;
+    arc += r.length;
+    r.arcLength = arc;
+    r.end = sp.end;
+    r.feed = m.kind == MoveKind::Rapid ? 0.0 : m.feed;
+    r.dt = r.feed > 0.0 ? r.length / r.feed * 60.0 : 0.0;
+    r.removed = r.mrr = r.width = r.depth = r.engagementRad = kNaN;
+    r.curvature = curvatureOf(m);
+    out.cuttingTime += r.dt;
+    // The stock on the right: turning left puts it on the outer side (concave).
+    if (r.curvature != 0.0)
+      r.side = (r.curvature > 0.0) == stockOnRight ? PathSide::Concave : PathSide::Convex;
+    r.mrrExact = r.mrrPaper = 0.0;
+    if (m.kind != MoveKind::Rapid) analytic(r, cutter, sp, *options.stepover, d);
+    out.steps.push_back(r);
+  }
   return out;
 }
 

@@ -89,4 +89,12 @@ struct SimulationResult {
 SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelStock& stock,
                           const SimulationOptions& options);
 
+/// The same steps without a stock (the paper's setting): every feed step is taken to cut at
+/// the nominal options.stepover and options.depth (both required), with the stock on the
+/// right of the path (climb milling with an M3 spindle) or on its left, which decides
+/// concave or convex; the analytic MRR in both forms per step, the measured fields NaN.
+/// Steps no longer than options.stepLength (0: a tenth of the cutter diameter).
+SimulationResult analyticSteps(const Toolpath& path, const AptCutter& cutter,
+                               const SimulationOptions& options, bool stockOnRight = true);
+
 }  // namespace engage

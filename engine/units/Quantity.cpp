@@ -71,6 +71,9 @@ const std::vector<Unit>& unitsOf(Dimension dim) {
       {"mm/s2", 1.0, kM},          {"mm/s^2", 1.0, kM},          {"m/s2", 1000.0, kM},
       {"m/s^2", 1000.0, kM},       {"in/s2", kInch, kI},         {"in/s^2", kInch, kI},
       {"ft/s2", 12.0 * kInch, kI}, {"ft/s^2", 12.0 * kInch, kI}, {"g", kStandardGravity, kNone}};
+  static const std::vector<Unit> jerk{{"mm/s3", 1.0, kM},   {"mm/s^3", 1.0, kM},
+                                      {"m/s3", 1000.0, kM}, {"m/s^3", 1000.0, kM},
+                                      {"in/s3", kInch, kI}, {"in/s^3", kInch, kI}};
   static const std::vector<Unit> spindle{
       {"rpm", 1.0, kNone}, {"rev/min", 1.0, kNone}, {"1/min", 1.0, kNone}, {"rev/s", 60.0, kNone}};
   // 1 hp*min/in^3 = 745.7 W * 60 s / 16387.064 mm^3 = 2.7303 J/mm^3.
@@ -106,6 +109,8 @@ const std::vector<Unit>& unitsOf(Dimension dim) {
       return volumeRate;
     case Dimension::Acceleration:
       return acceleration;
+    case Dimension::Jerk:
+      return jerk;
     case Dimension::SpindleSpeed:
       return spindle;
     case Dimension::SpecificEnergy:
@@ -159,6 +164,8 @@ const Display& displayOf(Dimension dim) {
                                     "in_s2",
                                     kInch,
                                     "an acceleration such as 2000mm/s2, 7.27in/s2 or 0.3g"};
+  static const Display jerk{
+      "mm/s^3", "mm_s3", 1.0, "in/s^3", "in_s3", kInch, "a jerk such as 50000mm/s3 or 2000in/s3"};
   static const Display spindle{
       "rpm", "rpm", 1.0, "rpm", "rpm", 1.0, "a spindle speed such as 12000rpm"};
   static const Display energy{"J/mm^3",
@@ -188,6 +195,8 @@ const Display& displayOf(Dimension dim) {
       return volumeRate;
     case Dimension::Acceleration:
       return acceleration;
+    case Dimension::Jerk:
+      return jerk;
     case Dimension::SpindleSpeed:
       return spindle;
     case Dimension::SpecificEnergy:

@@ -27,6 +27,7 @@ enum class Dimension {
   SurfaceSpeed,    ///< m/min | ft/min; internal mm/min
   VolumeRate,      ///< mm^3/min | in^3/min
   Acceleration,    ///< mm/s^2 | in/s^2
+  Jerk,            ///< mm/s^3 | in/s^3
   SpindleSpeed,    ///< rpm (both systems)
   SpecificEnergy,  ///< J/mm^3 | hp*min/in^3; internal J/mm^3
   Force,           ///< N | lbf; internal N

@@ -204,3 +204,68 @@ TEST_CASE("the analytic model can drive the schedule instead of the measurement"
     if (sim.steps[i].line == 15 && sc.binding[i] == Binding::None)
       CHECK(sc.feed[i] == Approx(600.0));
 }
+
+TEST_CASE("changeDistance: S-curve distances worked by hand", "[schedule]") {
+  // a = 500 mm/s^2, j = 5000 mm/s^3: a^2/j = 50 mm/s. From 10 to 40 mm/s (dv = 30 < 50): the
+  // acceleration is a triangle, T = 2 sqrt(30/5000) = 0.15492 s, distance 25 T = 3.873 mm.
+  CHECK(changeDistance(10, 40, 500, 5000) ==
+        Approx(25 * 2 * std::sqrt(30.0 / 5000)).epsilon(1e-12));
+  // From 0 to 100 mm/s (dv = 100 >= 50): T = 100/500 + 500/5000 = 0.3 s, distance 50 T = 15 mm.
+  CHECK(changeDistance(0, 100, 500, 5000) == Approx(15.0).epsilon(1e-12));
+  CHECK(changeDistance(100, 0, 500, 5000) == Approx(15.0).epsilon(1e-12));  // symmetric
+  // Without jerk limit: Eq 24's (v1^2 - v0^2) / (2a) = 10 mm.
+  CHECK(changeDistance(0, 100, 500, 0) == Approx(10.0).epsilon(1e-12));
+}
+
+TEST_CASE("a jerk limit leaves room for the controller's S-curve before a load peak",
+          "[schedule]") {
+  // The corner program: the schedule must slow down for the corner's peak. With a jerk limit
+  // every pair of scheduled feed steps i < k on one run of feed moves must be at least the
+  // S-curve distance between their feeds apart (changeDistance, checked by hand above).
+  const std::string source = fig9();
+  const Toolpath path = readProgramText(source, "fig9.ngc");
+  const AptCutter cutter = AptCutter::flat(6.0, 18.0);
+  VoxelStock stock = fig9Stock();
+  const SimulationResult sim = simulate(path, cutter, stock, {});
+  ScheduleOptions o;
+  o.targetMrr = 3600.0;
+  o.feedMin = 100.0;
+  o.feedMax = 1200.0;
+  o.acceleration = 500.0;
+  o.minChange = 0.02;
+  const Schedule loose = scheduleFeeds(path, sim, o);
+  o.jerk = 2000.0;  // mm/s^3: a^2/j = 125 mm/s, so every change here is a triangle
+  const Schedule sc = scheduleFeeds(path, sim, o);
+  const auto& st = sim.steps;
+  auto feedStep = [&](std::size_t i) { return st[i].kind != MoveKind::Rapid && st[i].feed > 0; };
+  std::size_t pairs = 0;
+  for (std::size_t i = 0; i < st.size(); ++i)
+    for (std::size_t k = i + 1; k < st.size() && feedStep(i); ++k) {
+      if (!feedStep(k)) break;
+      const double need = changeDistance(sc.feed[i] / 60, sc.feed[k] / 60, 500.0, 2000.0);
+      REQUIRE(need <= st[k].arcLength - st[i].arcLength + 1e-9);
+      ++pairs;
+    }
+  CHECK(pairs > 1000);
+  // The jerk limit only lowers feeds, and it does lower some: the slow-down starts earlier.
+  bool lower = false;
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    CHECK(sc.feed[i] <= loose.feed[i] + 1e-9);
+    lower = lower || sc.feed[i] < loose.feed[i] - 1e-9;
+  }
+  CHECK(lower);
+  CHECK(sc.timeAfter > loose.timeAfter);
+}
+
+TEST_CASE("rapids are timed from standstill to standstill", "[schedule]") {
+  // 100 mm at 6000 mm/min (100 mm/s) with a = 1000 mm/s^2: 5 mm to speed up, 5 to stop,
+  // 0.1 s each, 90 mm at full speed: 1.1 s. 4 mm: the peak speed sqrt(a L) = 63.25 mm/s is
+  // never passed, 2 sqrt(L/a) = 0.1265 s. Feed moves are not counted.
+  const Toolpath path =
+      readProgramText("G21 G90\nG0 X100\nG1 X110 F600\nG0 X106\nM2\n", "rapids.ngc");
+  CHECK(rapidTime(path, 6000, 1000, 0) == Approx(1.1 + 2 * std::sqrt(4.0 / 1000)).epsilon(1e-9));
+  CHECK(rapidTime(path, 6000, 0, 0) == Approx(1.04).epsilon(1e-12));  // no limit: 104 mm / 100
+  CHECK(rapidTime(path, 0, 1000, 0) == 0.0);
+  // A jerk limit only adds time.
+  CHECK(rapidTime(path, 6000, 1000, 20000) > rapidTime(path, 6000, 1000, 0));
+}

@@ -2,6 +2,7 @@
 
 #include "engine/sim/Simulation.h"
 
+#include "cutters/Error.h"
 #include "engine/gcode/GcodeReader.h"
 
 #include <catch2/catch.hpp>
@@ -175,4 +176,39 @@ TEST_CASE("programs that move rotary axes are refused with the line", "[sim]") {
   CHECK_THROWS_WITH(
       simulate(path, AptCutter::flat(6.0, 18.0), stock, {}),
       Catch::Matchers::Contains("rotary.ngc:3: this line moves a rotary or UVW axis"));
+}
+
+TEST_CASE("analytic steps without a stock: the side from the stock's side of the path", "[sim]") {
+  // Flat D 6, s = 3, d = 2, 600 mm/min: straight MRR s d F = 3600 mm^3/min. A quarter circle
+  // of tool-centre radius 10 turning left (G3): with the stock on the right it lies on the
+  // outer side (concave), the band's centroid at rho + r - s/2 = 11.5: 3600 x 1.15 = 4140;
+  // with the stock on the left it is convex: 3600 x (10 - 1.5)/10 = 3060.
+  const Toolpath path = readProgramText(
+      "G21 G90 G17\nG0 X0 Y-10 Z5\nG1 Z-2 F600\nG1 X10\nG3 X20 Y0 I0 J10\nM2\n", "arc.ngc");
+  const AptCutter cutter = AptCutter::flat(6.0, 18.0);
+  SimulationOptions o;
+  o.stepover = 3.0;
+  o.depth = 2.0;
+  for (const bool right : {true, false}) {
+    const SimulationResult r = analyticSteps(path, cutter, o, right);
+    bool sawLine = false, sawArc = false;
+    for (const StepRecord& s : r.steps) {
+      CHECK(s.length <= 0.6 + 1e-9);  // a tenth of the diameter
+      CHECK(std::isnan(s.mrr));       // nothing is measured
+      if (s.kind == MoveKind::Line && s.end.z() == Approx(-2.0) && s.end.y() == Approx(-10.0) &&
+          s.end.x() > 0.1) {
+        sawLine = true;
+        CHECK(s.side == PathSide::Straight);
+        CHECK(s.mrrExact == Approx(3600.0).epsilon(1e-12));
+      }
+      if (s.kind == MoveKind::Arc) {
+        sawArc = true;
+        CHECK(s.side == (right ? PathSide::Concave : PathSide::Convex));
+        CHECK(s.mrrExact == Approx(right ? 4140.0 : 3060.0).epsilon(1e-9));
+      }
+    }
+    CHECK((sawLine && sawArc));
+  }
+  o.depth.reset();
+  CHECK_THROWS_AS(analyticSteps(path, cutter, o), ParameterError);
 }

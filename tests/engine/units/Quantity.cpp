@@ -34,6 +34,8 @@ TEST_CASE("quantities with suffixes convert to mm, rad, mm/min, mm^3/min, mm/s^2
   CHECK(parse("2000mm/s2", Dimension::Acceleration) == Approx(2000.0).epsilon(kRel));
   CHECK(parse("7.27in/s2", Dimension::Acceleration) == Approx(7.27 * 25.4).epsilon(kRel));
   CHECK(parse("0.3g", Dimension::Acceleration) == Approx(0.3 * 9806.65).epsilon(kRel));
+  CHECK(parse("50000mm/s3", Dimension::Jerk) == Approx(50000.0).epsilon(kRel));
+  CHECK(parse("2000in/s^3", Dimension::Jerk) == Approx(2000.0 * 25.4).epsilon(kRel));
   CHECK(parse("12000rpm", Dimension::SpindleSpeed) == Approx(12000.0).epsilon(kRel));
   CHECK(parse("0.7J/mm3", Dimension::SpecificEnergy) == Approx(0.7).epsilon(kRel));
   // 1 hp*min/in^3 = 745.69987 W * 60 s / 16387.064 mm^3 = 2.730324 J/mm^3.
