@@ -18,27 +18,15 @@
 
 #include "cutters/AptCutter.h"
 #include "cutters/Sweep.h"
+#include "stock/Stock.h"
 
 #include <memory>
 #include <string>
 
 namespace engage {
 
-/// What one removal did: measured volume and engagement, and the work it cost.
-struct Removal {
-  double volume = 0.0;         ///< removed volume, mm^3
-  double axialDepth = 0.0;     ///< extent of the removed material along the tool axis, mm
-  double radialWidth = 0.0;    ///< extent across the feed direction (at the step end), mm
-  double engagementRad = 0.0;  ///< angle of the cutter's periphery in contact, rad
-  /// Volume-weighted mean offset of the removed material across the feed direction, mm:
-  /// + on the left of the direction of travel (seen from +Z). Tells which side the stock is.
-  double lateral = 0.0;
-  long voxelsChanged = 0;  ///< voxels whose fraction dropped
-  long voxelsVisited = 0;  ///< voxels whose distance was evaluated
-};
-
 /// Sparse-voxel stock of volume fractions.
-class VoxelStock {
+class VoxelStock : public Stock {
  public:
   /// A box of material (mm). Voxels that the box covers partly get their covered fraction.
   /// Throws ParameterError for an empty box, a non-positive voxel size, or a voxel size whose
@@ -51,14 +39,15 @@ class VoxelStock {
 
   VoxelStock(VoxelStock&&) noexcept;
   VoxelStock& operator=(VoxelStock&&) noexcept;
-  ~VoxelStock();
+  ~VoxelStock() override;
 
   /// Voxel size h, mm.
   double voxelSize() const;
+  double resolution() const override { return voxelSize(); }
   /// Material volume: sum of fractions times h^3, mm^3.
-  double volume() const;
+  double volume() const override;
   /// Bounds of the material, mm (empty box when no material is left).
-  Box3 bounds() const;
+  Box3 bounds() const override;
   /// Bytes used by the grids (the stock and, when captured, the removed-volume grids).
   std::size_t memoryBytes() const;
 
@@ -68,7 +57,7 @@ class VoxelStock {
 
   /// Remove one step's swept solid. With capture on, `step` and the step's MRR (removed
   /// volume over `dtSeconds`, mm^3/min; 0 when dtSeconds is 0) go to the capture grids.
-  Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0);
+  Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) override;
 
   /// Write stock.vdb: grid "stock" (material fraction). Written to a temporary name and
   /// renamed when complete. Throws Error on I/O failure.

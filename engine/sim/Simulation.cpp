@@ -109,10 +109,10 @@ void finish(Agreement& a) {
 
 }  // namespace
 
-SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelStock& stock,
+SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& stock,
                           const SimulationOptions& options) {
   refuseOtherAxes(path);
-  const double h = stock.voxelSize();
+  const double h = stock.resolution();
   const double L = options.stepLength > 0.0 ? options.stepLength : 2.5 * h;
   SimulationResult out;
   out.volumeBefore = stock.volume();

@@ -7,7 +7,7 @@
 #include "cutters/AptCutter.h"
 #include "engine/gcode/Toolpath.h"
 #include "engine/model/EngagementModel.h"
-#include "stock/VoxelStock.h"
+#include "stock/Stock.h"
 
 #include <functional>
 #include <optional>
@@ -86,7 +86,7 @@ struct SimulationResult {
 };
 
 /// Run a tool path through a stock. Throws Error from the model or the stock.
-SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, VoxelStock& stock,
+SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& stock,
                           const SimulationOptions& options);
 
 /// The same steps without a stock (the paper's setting): every feed step is taken to cut at

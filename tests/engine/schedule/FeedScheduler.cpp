@@ -3,6 +3,7 @@
 #include "engine/schedule/FeedScheduler.h"
 
 #include "engine/gcode/GcodeReader.h"
+#include "stock/VoxelStock.h"
 #include "engine/model/EngagementModel.h"
 
 #include <catch2/catch.hpp>

@@ -4,6 +4,7 @@
 
 #include "cutters/Error.h"
 #include "engine/gcode/GcodeReader.h"
+#include "stock/VoxelStock.h"
 
 #include <catch2/catch.hpp>
 

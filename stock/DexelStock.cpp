@@ -1,0 +1,385 @@
+#include "stock/DexelStock.h"
+
+#include "cutters/Error.h"
+#include "stock/TriangleMesh.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace engage {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+/// Precision of a ray's entry into and exit from a swept solid, mm.
+constexpr double kZTolerance = 1e-4;
+/// Angular bins of the engagement arc.
+constexpr int kAngleBins = 256;
+
+using Interval = DexelStock::Interval;
+using Intervals = std::vector<Interval>;
+
+/// Leave at most `keep` of the column's material in [a, b] (keep = 1 - the share the cutter
+/// covers); returns the material removed, mm (length x share).
+double cut(Intervals& iv, double a, double b, double keep) {
+  if (!(b > a)) return 0.0;
+  double removed = 0.0;
+  Intervals out;
+  out.reserve(iv.size() + 2);
+  for (const Interval& x : iv) {
+    if (x.z1 <= a || x.z0 >= b || x.f <= keep) {
+      out.push_back(x);
+      continue;
+    }
+    const double lo = std::max(x.z0, a), hi = std::min(x.z1, b);
+    removed += (hi - lo) * (x.f - keep);
+    if (x.z0 < lo) out.push_back({x.z0, lo, x.f});
+    if (keep > 1e-9) out.push_back({lo, hi, keep});
+    if (hi < x.z1) out.push_back({hi, x.z1, x.f});
+  }
+  // Neighbours with one share become one interval.
+  Intervals merged;
+  merged.reserve(out.size());
+  for (const Interval& x : out) {
+    if (!merged.empty() && merged.back().z1 >= x.z0 - 1e-12 && merged.back().f == x.f)
+      merged.back().z1 = x.z1;
+    else
+      merged.push_back(x);
+  }
+  iv.swap(merged);
+  return removed;
+}
+
+/// Share of [a0, a1] covered by [b0, b1].
+double overlap(double a0, double a1, double b0, double b1) {
+  return std::max(0.0, std::min(a1, b1) - std::max(a0, b0)) / (a1 - a0);
+}
+
+void checkMemory(double rays) {
+  const double pages = static_cast<double>(sysconf(_SC_PHYS_PAGES));
+  const double pageSize = static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  const double bytes = rays * 48.0;  // a vector, a weight and one interval per ray
+  if (pages > 0 && pageSize > 0 && bytes > 0.5 * pages * pageSize)
+    throw ParameterError("a dexel stock of " + std::to_string(static_cast<long long>(rays)) +
+                         " rays needs about " +
+                         std::to_string(static_cast<long long>(bytes / 1e9)) +
+                         " GB, more than half of this machine's memory; use a larger spacing");
+}
+
+/// The XY distance from q to the step's path (its tip's XY track).
+double pathDistance(const StepPath& p, const Eigen::Vector2d& q) {
+  if (p.kind == StepPath::Kind::ArcXY) {
+    const Eigen::Vector2d c = p.center.head<2>(), a = p.start.head<2>() - c;
+    const Eigen::Vector2d v = q - c;
+    const double r = a.norm();
+    double t = std::atan2(a.x() * v.y() - a.y() * v.x(), a.dot(v));  // angle from the start
+    if (p.sweepRad < 0) t = -t;
+    if (t < 0) t += 2.0 * kPi;
+    if (t <= std::abs(p.sweepRad)) return std::abs(v.norm() - r);
+    return std::min((q - p.start.head<2>()).norm(), (q - p.end.head<2>()).norm());
+  }
+  const Eigen::Vector2d a = p.start.head<2>(), d = p.end.head<2>() - a;
+  const double l2 = d.squaredNorm();
+  const double t = l2 > 0 ? std::clamp((q - a).dot(d) / l2, 0.0, 1.0) : 0.0;
+  return (a + t * d - q).norm();
+}
+
+/// Does the cutter's radius never shrink upwards (so that a vertical line at distance rho
+/// from its axis meets it in one interval from the profile's lowest height at rho up)?
+bool widensUpwards(const AptCutter& c) {
+  double previous = c.radiusAt(0.0);
+  for (int k = 1; k <= 256; ++k) {
+    const double w = c.radiusAt(c.height() * k / 256.0);
+    if (w < previous - 1e-12) return false;
+    previous = w;
+  }
+  return true;
+}
+
+/// Lowest height above the tip where the cutter's radius reaches rho (rho <= max radius).
+double lowestAt(const AptCutter& c, double rho) {
+  if (c.radiusAt(0.0) >= rho) return 0.0;
+  double lo = 0.0, hi = c.height();
+  for (int k = 0; k < 60 && hi - lo > 1e-9; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (c.radiusAt(mid) >= rho ? hi : lo) = mid;
+  }
+  return hi;
+}
+
+}  // namespace
+
+DexelStock::DexelStock(const Box3& b, double spacing) : h_(spacing) {
+  if (!(spacing > 0.0 && std::isfinite(spacing)))
+    throw ParameterError("dexel spacing must be positive, found " + std::to_string(spacing) +
+                         " mm");
+  if (!(b.max.x() > b.min.x() && b.max.y() > b.min.y() && b.max.z() > b.min.z()))
+    throw ParameterError("the stock box is empty");
+  const double nx = std::ceil((b.max.x() - b.min.x()) / spacing - 1e-9);
+  const double ny = std::ceil((b.max.y() - b.min.y()) / spacing - 1e-9);
+  checkMemory(nx * ny);
+  nx_ = static_cast<int>(nx);
+  ny_ = static_cast<int>(ny);
+  x0_ = b.min.x();
+  y0_ = b.min.y();
+  weight_.assign(static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_), 0.0);
+  rays_.assign(weight_.size(), {});
+}
+
+DexelStock DexelStock::box(const Box3& b, double spacing) {
+  DexelStock s(b, spacing);
+  // The grid starts at the box's corner: every column is covered whole but the last row and
+  // column, covered by their share of the box.
+  for (int j = 0; j < s.ny_; ++j)
+    for (int i = 0; i < s.nx_; ++i) {
+      const double x = s.x0_ + i * spacing, y = s.y0_ + j * spacing;
+      const double share = overlap(x, x + spacing, b.min.x(), b.max.x()) *
+                           overlap(y, y + spacing, b.min.y(), b.max.y());
+      if (share <= 0.0) continue;
+      s.weight_[s.index(i, j)] = share;
+      s.rays_[s.index(i, j)] = {{b.min.z(), b.max.z(), 1.0}};
+    }
+  return s;
+}
+
+DexelStock DexelStock::fromMesh(const std::string& path, double spacing) {
+  const TriangleMesh mesh = readMesh(path);
+  if (mesh.triangles.empty()) throw Error("'" + path + "' holds no triangles");
+  if (const std::size_t open = boundaryEdgeCount(mesh))
+    throw ParameterError("'" + path + "' is not closed: " + std::to_string(open) +
+                         " edges belong to one triangle only");
+  Box3 b;
+  b.min = Eigen::Vector3d::Constant(1e300);
+  b.max = Eigen::Vector3d::Constant(-1e300);
+  for (const auto& p : mesh.points) {
+    const Eigen::Vector3d q(p[0], p[1], p[2]);
+    b.min = b.min.cwiseMin(q);
+    b.max = b.max.cwiseMax(q);
+  }
+  DexelStock s(b, spacing);
+  // Every ray through the column centres: the heights where it crosses the triangles,
+  // sorted, paired inside-outside. A ray through an edge or a vertex meets several triangles
+  // at one height: those facing the same way count once (it crosses the surface once), those
+  // facing opposite ways (a silhouette it grazes) both count (an empty interval).
+  struct Hit {
+    double z;
+    bool up;
+  };
+  std::vector<std::vector<Hit>> hits(s.rays_.size());
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d a(mesh.points[t[0]][0], mesh.points[t[0]][1], mesh.points[t[0]][2]);
+    const Eigen::Vector3d bb(mesh.points[t[1]][0], mesh.points[t[1]][1], mesh.points[t[1]][2]);
+    const Eigen::Vector3d c(mesh.points[t[2]][0], mesh.points[t[2]][1], mesh.points[t[2]][2]);
+    const double det = (bb.x() - a.x()) * (c.y() - a.y()) - (c.x() - a.x()) * (bb.y() - a.y());
+    if (std::abs(det) < 1e-18) continue;  // vertical: no ray crosses it
+    const double xl = std::min({a.x(), bb.x(), c.x()}), xh = std::max({a.x(), bb.x(), c.x()});
+    const double yl = std::min({a.y(), bb.y(), c.y()}), yh = std::max({a.y(), bb.y(), c.y()});
+    const int i0 = std::max(0, static_cast<int>(std::ceil((xl - s.x0_) / spacing - 0.5)));
+    const int i1 = std::min(s.nx_ - 1, static_cast<int>(std::floor((xh - s.x0_) / spacing - 0.5)));
+    const int j0 = std::max(0, static_cast<int>(std::ceil((yl - s.y0_) / spacing - 0.5)));
+    const int j1 = std::min(s.ny_ - 1, static_cast<int>(std::floor((yh - s.y0_) / spacing - 0.5)));
+    constexpr double kEdge = 1e-12;  // barycentric slack: edges belong to both triangles
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) {
+        const double x = s.x0_ + (i + 0.5) * spacing, y = s.y0_ + (j + 0.5) * spacing;
+        const double u = ((x - a.x()) * (c.y() - a.y()) - (c.x() - a.x()) * (y - a.y())) / det;
+        const double v = ((bb.x() - a.x()) * (y - a.y()) - (x - a.x()) * (bb.y() - a.y())) / det;
+        if (u < -kEdge || v < -kEdge || u + v > 1.0 + kEdge) continue;
+        hits[s.index(i, j)].push_back(
+            {a.z() + u * (bb.z() - a.z()) + v * (c.z() - a.z()), det > 0.0});
+      }
+  }
+  for (std::size_t k = 0; k < hits.size(); ++k) {
+    auto& hz = hits[k];
+    std::sort(hz.begin(), hz.end(),
+              [](const Hit& p, const Hit& q) { return p.z != q.z ? p.z < q.z : p.up < q.up; });
+    std::vector<double> z;
+    for (std::size_t m = 0; m < hz.size(); ++m)
+      if (m == 0 || std::abs(hz[m].z - hz[m - 1].z) > 1e-9 || hz[m].up != hz[m - 1].up)
+        z.push_back(hz[m].z);
+    for (std::size_t m = 0; m + 1 < z.size(); m += 2)
+      if (z[m + 1] > z[m]) s.rays_[k].push_back({z[m], z[m + 1], 1.0});
+    s.weight_[k] = s.rays_[k].empty() ? 0.0 : 1.0;
+  }
+  return s;
+}
+
+double DexelStock::volume() const {
+  double v = 0.0;
+  for (std::size_t k = 0; k < rays_.size(); ++k) {
+    double length = 0.0;
+    for (const Interval& x : rays_[k])
+      length += (x.z1 - x.z0) * x.f;
+    v += length * weight_[k];
+  }
+  return v * h_ * h_;
+}
+
+Box3 DexelStock::bounds() const {
+  Box3 b;
+  b.min = Eigen::Vector3d::Constant(1e300);
+  b.max = Eigen::Vector3d::Constant(-1e300);
+  for (int j = 0; j < ny_; ++j)
+    for (int i = 0; i < nx_; ++i) {
+      const auto& r = rays_[index(i, j)];
+      if (r.empty()) continue;
+      b.min = b.min.cwiseMin(Eigen::Vector3d(x0_ + i * h_, y0_ + j * h_, r.front().z0));
+      b.max = b.max.cwiseMax(Eigen::Vector3d(x0_ + (i + 1) * h_, y0_ + (j + 1) * h_, r.back().z1));
+    }
+  if (b.min.x() > b.max.x()) b.min = b.max = Eigen::Vector3d::Zero();
+  return b;
+}
+
+std::size_t DexelStock::segments() const {
+  std::size_t n = 0;
+  for (const auto& r : rays_)
+    n += r.size();
+  return n;
+}
+
+std::size_t DexelStock::memoryBytes() const {
+  std::size_t bytes = weight_.size() * sizeof(double) + rays_.size() * sizeof(Intervals);
+  for (const auto& r : rays_)
+    bytes += r.capacity() * sizeof(Interval);
+  return bytes;
+}
+
+Removal DexelStock::remove(const Sweep& sweep, int, double) {
+  const Box3 sb = sweep.bounds();
+  const StepPath& path = sweep.path();
+  const AptCutter& cutter = sweep.cutter();
+  const bool flat = std::abs(path.end.z() - path.start.z()) < 1e-12 &&
+                    path.kind != StepPath::Kind::Polyline && widensUpwards(cutter);
+  const int i0 = std::max(0, static_cast<int>(std::floor((sb.min.x() - x0_) / h_ - 0.5)));
+  const int i1 = std::min(nx_ - 1, static_cast<int>(std::ceil((sb.max.x() - x0_) / h_ - 0.5)));
+  const int j0 = std::max(0, static_cast<int>(std::floor((sb.min.y() - y0_) / h_ - 0.5)));
+  const int j1 = std::min(ny_ - 1, static_cast<int>(std::ceil((sb.max.y() - y0_) / h_ - 0.5)));
+
+  // Feed direction at the step's end, as the voxel stock takes it.
+  const Eigen::Vector3d end = path.end;
+  Eigen::Vector3d tangent = path.end - path.at(std::max(0.0, 1.0 - 1e-3));
+  if (path.kind == StepPath::Kind::ArcXY) {
+    const Eigen::Vector3d r = path.end - path.center;
+    tangent = path.sweepRad >= 0 ? Eigen::Vector3d(-r.y(), r.x(), 0.0)
+                                 : Eigen::Vector3d(r.y(), -r.x(), 0.0);
+  }
+  Eigen::Vector2d u = tangent.head<2>();
+  if (u.norm() < 1e-12) u = Eigen::Vector2d(1.0, 0.0);
+  u.normalize();
+  const Eigen::Vector2d n(-u.y(), u.x());
+
+  Removal out;
+  double zMin = 1e300, zMax = -1e300, sMin = 1e300, sMax = -1e300;
+  struct Cut {
+    Eigen::Vector2d xy;
+    double z0, z1;
+  };
+  std::vector<Cut> cuts;
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      Intervals& ray = rays_[index(i, j)];
+      if (ray.empty()) continue;
+      const Eigen::Vector2d q(x0_ + (i + 0.5) * h_, y0_ + (j + 0.5) * h_);
+      // The swept solid along this ray: intervals with the share of the column it covers.
+      std::vector<Interval> solid;
+      if (flat) {
+        const double rho = pathDistance(path, q);
+        if (rho - 0.5 * h_ > cutter.maxRadius()) continue;
+        const double z = path.start.z(), top = z + cutter.height();
+        // Full cover where the radius exceeds rho + h/2, none below rho - h/2; across the band
+        // between (a vertical wall: the whole height) the cover of its pieces' middles.
+        const double zFull =
+            rho + 0.5 * h_ <= cutter.maxRadius() ? z + lowestAt(cutter, rho + 0.5 * h_) : top;
+        const double zNone = z + lowestAt(cutter, std::max(0.0, rho - 0.5 * h_));
+        // Only the part of the band where this ray holds material matters.
+        const double bandTop = std::min(zFull, ray.back().z1);
+        constexpr int kBandPieces = 8;
+        for (int k = 0; k < kBandPieces && bandTop > zNone; ++k) {
+          const double a = zNone + (bandTop - zNone) * k / kBandPieces;
+          const double b = zNone + (bandTop - zNone) * (k + 1) / kBandPieces;
+          const double w = cutter.radiusAt(0.5 * (a + b) - z);
+          const double cover = std::clamp(0.5 - (rho - w) / h_, 0.0, 1.0);
+          if (cover > 0.0) solid.push_back({a, b, cover});
+        }
+        if (bandTop < zFull) solid.push_back({bandTop, zFull, 1.0});  // (no material there)
+        if (top > zFull) solid.push_back({zFull, top, 1.0});
+      } else {
+        ++out.voxelsVisited;
+        const double lo = std::max(sb.min.z(), ray.front().z0) - kZTolerance;
+        const double hi = std::min(sb.max.z(), ray.back().z1) + kZTolerance;
+        if (!(hi > lo)) continue;
+        auto d = [&](double z) { return sweep.signedDistance({q.x(), q.y(), z}); };
+        double z = lo, dz = d(z);
+        bool inside = dz < 0.0;
+        double entry = lo;
+        while (z < hi) {
+          const double step = std::max(std::abs(dz), 0.25 * kZTolerance);
+          double z2 = std::min(z + step, hi);
+          const double d2 = d(z2);
+          if ((d2 < 0.0) != inside) {
+            double a = z, b = z2;  // a sign change within [a, b]: bisect it
+            while (b - a > kZTolerance) {
+              const double m = 0.5 * (a + b);
+              ((d(m) < 0.0) == inside ? a : b) = m;
+            }
+            const double crossing = 0.5 * (a + b);
+            if (inside)
+              solid.push_back({entry, crossing, 1.0});
+            else
+              entry = crossing;
+            inside = !inside;
+          }
+          z = z2;
+          dz = d2;
+        }
+        if (inside) solid.push_back({entry, hi, 1.0});
+      }
+      double removed = 0.0;
+      for (const Interval& sx : solid) {
+        // What of the ray in [z0, z1] loses material; remember where, for the engagement.
+        for (const Interval& x : ray)
+          if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f)
+            cuts.push_back({q, std::max(x.z0, sx.z0), std::min(x.z1, sx.z1)});
+        removed += cut(ray, sx.z0, sx.z1, 1.0 - sx.f);
+      }
+      if (removed <= 0.0) continue;
+      const double w = weight_[index(i, j)];
+      const double volume = removed * w * h_ * h_;
+      out.volume += volume;
+      ++out.voxelsChanged;
+      const double side = (q - end.head<2>()).dot(n);
+      out.lateral += volume * side;
+      sMin = std::min(sMin, side - 0.5 * h_);
+      sMax = std::max(sMax, side + 0.5 * h_);
+    }
+  if (out.voxelsChanged > 0) {
+    for (const Cut& c : cuts) {
+      zMin = std::min(zMin, c.z0 - end.z());
+      zMax = std::max(zMax, c.z1 - end.z());
+    }
+    out.lateral /= out.volume;
+    out.axialDepth = std::min(zMax - std::max(zMin, 0.0), cutter.height());
+    out.radialWidth = sMax - sMin;
+    // Engagement angle: the arc of the periphery, at mid depth, where this step removed
+    // material (rays within a column of the cutter's edge there).
+    const double zMid = std::clamp(0.5 * out.axialDepth, 0.0, cutter.height());
+    const double edge = cutter.radiusAt(zMid);
+    std::vector<bool> bin(kAngleBins, false);
+    for (const Cut& c : cuts) {
+      if (c.z0 > end.z() + zMid || c.z1 < end.z() + zMid) continue;
+      const Eigen::Vector2d rel = c.xy - end.head<2>();
+      if (std::abs(rel.norm() - edge) > h_) continue;
+      double theta = std::atan2(rel.dot(n), rel.dot(u));
+      if (theta < 0) theta += 2.0 * kPi;
+      bin[static_cast<std::size_t>(std::min(kAngleBins - 1.0, theta / (2.0 * kPi) * kAngleBins))] =
+          true;
+    }
+    out.engagementRad =
+        2.0 * kPi * static_cast<double>(std::count(bin.begin(), bin.end(), true)) / kAngleBins;
+  }
+  return out;
+}
+
+}  // namespace engage

@@ -1,0 +1,79 @@
+#pragma once
+/// \file DexelStock.h
+/// The material as Z-dexels: a grid of vertical rays (spacing h), each holding the sorted
+/// intervals of z where its h x h column holds material, so undercuts and several levels are
+/// kept. Computed in a different way from the voxel stock: exact along the tool axis (each
+/// removal cuts a ray's intervals at the swept solid's surface, to 1e-4 mm), sampled across
+/// it. Each interval carries the share f of its column's cross-section still material, which
+/// is where sub-ray accuracy pays: where the cutter's outline crosses a column, the column
+/// keeps min(f, 1 - c), c the share the cutter covers (from the signed distance of the ray to
+/// the outline, clamp(1/2 - d/h, 0, 1)); a plain heightfield removes all or nothing and errs
+/// by 6-17 % per step on a slot (shared/BUILD-NOTES.md). Columns at the stock's edges weigh
+/// by the share of their area inside it.
+///
+/// A step's swept solid meets a ray in an interval: for steps that keep their height (lines
+/// and arcs in XY) of cutters whose radius never shrinks upwards, in closed form (from the
+/// distance of the ray to the step's path and the profile's radius over height, with the
+/// outline's coverage over the band of heights where it crosses the column); for every other
+/// step (plunges, ramps, helices), all or nothing, by marching the sweep's signed distance up
+/// the ray (steps of the distance itself, which never cross the surface) and bisecting its
+/// sign changes.
+
+#include "cutters/AptCutter.h"
+#include "cutters/Sweep.h"
+#include "stock/Stock.h"
+
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace engage {
+
+/// Z-dexel stock.
+class DexelStock : public Stock {
+ public:
+  /// A box of material (mm). Throws ParameterError for an empty box, a non-positive spacing
+  /// or a ray count that would not fit in this machine's memory.
+  static DexelStock box(const Box3& box, double spacing);
+  /// Material inside a closed triangle mesh (STL, OBJ, PLY), by casting every ray through it
+  /// (even-odd). Throws as VoxelStock::fromMesh.
+  static DexelStock fromMesh(const std::string& path, double spacing);
+
+  double resolution() const override { return h_; }
+  double volume() const override;
+  Box3 bounds() const override;
+  Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) override;
+
+  /// Rays in x and y, their spacing, and the grid's corner (mm).
+  int raysX() const { return nx_; }
+  int raysY() const { return ny_; }
+  double originX() const { return x0_; }
+  double originY() const { return y0_; }
+  /// A material interval of a ray: heights (mm) and the share of the column still material.
+  struct Interval {
+    double z0, z1;
+    double f;
+  };
+  /// The material intervals of ray (i, j), bottom up; and its column's share of the stock.
+  const std::vector<Interval>& ray(int i, int j) const { return rays_[index(i, j)]; }
+  double weight(int i, int j) const { return weight_[index(i, j)]; }
+  /// Material intervals in all rays (a measure of memory and of the stock's complexity).
+  std::size_t segments() const;
+  /// Bytes used by the rays.
+  std::size_t memoryBytes() const;
+
+ private:
+  DexelStock(const Box3& box, double spacing);
+  std::size_t index(int i, int j) const {
+    return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) +
+           static_cast<std::size_t>(i);
+  }
+
+  double h_ = 0.0, x0_ = 0.0, y0_ = 0.0;
+  int nx_ = 0, ny_ = 0;
+  std::vector<double> weight_;
+  std::vector<std::vector<Interval>> rays_;
+};
+
+}  // namespace engage

@@ -1,0 +1,40 @@
+#pragma once
+/// \file Stock.h
+/// The material as the simulation sees it: any stock model that can remove a step's swept
+/// cutter and say what it removed. Two models implement it, computed in unrelated ways, so
+/// that where they agree a user can trust the number: VoxelStock (volume fractions on
+/// OpenVDB) and DexelStock (vertical rays holding material intervals).
+
+#include "cutters/AptCutter.h"
+#include "cutters/Sweep.h"
+
+namespace engage {
+
+/// What one removal did: measured volume and engagement, and the work it cost.
+struct Removal {
+  double volume = 0.0;         ///< removed volume, mm^3
+  double axialDepth = 0.0;     ///< extent of the removed material along the tool axis, mm
+  double radialWidth = 0.0;    ///< extent across the feed direction (at the step end), mm
+  double engagementRad = 0.0;  ///< angle of the cutter's periphery in contact, rad
+  /// Volume-weighted mean offset of the removed material across the feed direction, mm:
+  /// + on the left of the direction of travel (seen from +Z). Tells which side the stock is.
+  double lateral = 0.0;
+  long voxelsChanged = 0;  ///< cells (voxels, or rays of a dexel stock) that lost material
+  long voxelsVisited = 0;  ///< cells whose distance was evaluated
+};
+
+/// A stock model.
+class Stock {
+ public:
+  virtual ~Stock() = default;
+  /// Its resolution, mm: the voxel size, or the ray spacing.
+  virtual double resolution() const = 0;
+  /// Material volume, mm^3.
+  virtual double volume() const = 0;
+  /// Bounds of the material, mm.
+  virtual Box3 bounds() const = 0;
+  /// Remove one step's swept solid; `step` and `dtSeconds` label it (for capture grids).
+  virtual Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) = 0;
+};
+
+}  // namespace engage
