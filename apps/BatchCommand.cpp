@@ -40,10 +40,12 @@ struct Job {
 };
 
 /// Option keys a job may carry, as the command-line options are spelled (without --).
-const std::set<std::string> kCommonKeys = {
-    "tool",         "diameter",     "corner-radius", "taper-angle", "tip-angle",
-    "bottom-angle", "flute-length", "flutes",        "stock",       "voxel",
-    "step",         "stepover",     "depth",         "units",       "tool-table"};
+const std::set<std::string> kCommonKeys = {"tool",         "diameter",    "corner-radius",
+                                           "taper-angle",  "tip-angle",   "bottom-angle",
+                                           "flute-length", "flutes",      "stock",
+                                           "voxel",        "step",        "stepover",
+                                           "depth",        "units",       "tool-table",
+                                           "stock-model",  "cross-check", "cross-check-tolerance"};
 const std::set<std::string> kScheduleKeys = {
     "target-mrr",  "feed-min",    "feed-max",        "air-feed", "accel", "min-change",
     "min-segment", "force-limit", "specific-energy", "spindle",  "model"};
@@ -91,8 +93,8 @@ std::vector<Job> readManifest(const fs::path& path) {
       }
       if (!kCommonKeys.count(key) && !kScheduleKeys.count(key))
         throw Error(where + ": unknown option \"" + key + "\"");
-      if (!value.is_string() && !value.is_number())
-        throw Error(where + ": \"" + key + "\" must be a string or a number");
+      if (!value.is_string() && !value.is_number() && !value.is_boolean())
+        throw Error(where + ": \"" + key + "\" must be a string, a number or true/false");
     }
     // Relative files are relative to the manifest.
     auto resolve = [&](const char* key) {
@@ -166,6 +168,22 @@ SimulateOptions optionsOf(const Job& job, const fs::path& folder) {
   get("specific-energy", o.specificEnergy);
   get("spindle", o.spindle);
   get("model", o.model);
+  get("stock-model", o.stockModel);
+  if (o.stockModel != "voxel" && o.stockModel != "dexel")
+    throw ParameterError("stock-model: expected voxel or dexel, found '" + o.stockModel + "'");
+  if (s.contains("cross-check")) {
+    const std::string c = text(s["cross-check"]);
+    if (c != "true" && c != "false")
+      throw ParameterError("cross-check: expected true or false, found '" + c + "'");
+    o.crossCheck = c == "true";
+  }
+  if (s.contains("cross-check-tolerance")) {
+    try {
+      o.crossTolerance = std::stod(text(s["cross-check-tolerance"]));
+    } catch (const std::exception&) {
+      throw ParameterError("cross-check-tolerance: expected a fraction such as 0.03");
+    }
+  }
   if (o.tool.tool.empty() || o.tool.diameter.empty())
     throw ParameterError("the job needs \"tool\" and \"diameter\"");
   if (o.stock.empty()) throw ParameterError("the job needs \"stock\"");

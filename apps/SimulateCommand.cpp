@@ -10,6 +10,7 @@
 #include "engine/schedule/FeedScheduler.h"
 #include "engine/sim/Simulation.h"
 #include "engine/units/Quantity.h"
+#include "stock/DexelStock.h"
 #include "stock/VoxelStock.h"
 
 #include <nlohmann/json.hpp>
@@ -31,7 +32,11 @@
 namespace engage::app {
 namespace {
 
-VoxelStock makeStock(const std::string& spec, double voxel, UnitSystem sys) {
+/// A stock of the chosen model ("voxel" or "dexel") from --stock (a box in program units, or
+/// a mesh in mm) at resolution h (voxel size or ray spacing).
+std::unique_ptr<Stock> makeStock(const std::string& spec, const std::string& model, double h,
+                                 UnitSystem sys) {
+  const bool dexel = model == "dexel";
   if (spec.rfind("box:", 0) == 0) {
     std::vector<double> v;
     std::stringstream s(spec.substr(4));
@@ -44,9 +49,12 @@ VoxelStock makeStock(const std::string& spec, double voxel, UnitSystem sys) {
     Box3 b;
     b.min = {std::min(v[0], v[3]), std::min(v[1], v[4]), std::min(v[2], v[5])};
     b.max = {std::max(v[0], v[3]), std::max(v[1], v[4]), std::max(v[2], v[5])};
-    return VoxelStock::box(b, voxel);
+    if (dexel) return std::make_unique<DexelStock>(DexelStock::box(b, h));
+    return std::make_unique<VoxelStock>(VoxelStock::box(b, h));
   }
-  return VoxelStock::fromMesh(spec, voxel);  // meshes are read in mm
+  // Meshes are read in mm.
+  if (dexel) return std::make_unique<DexelStock>(DexelStock::fromMesh(spec, h));
+  return std::make_unique<VoxelStock>(VoxelStock::fromMesh(spec, h));
 }
 
 const char* sideName(PathSide s) {
@@ -131,10 +139,19 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
     throw ParameterError("--stock is required (only schedule --model analytic runs without one)");
   if (!noStock && !o.materialSide.empty())
     throw ParameterError("--material-side applies without --stock (the stock tells the side)");
-  std::optional<VoxelStock> stockStore;
-  if (!noStock) stockStore.emplace(makeStock(o.stock, voxel, sys));
+  if (o.crossCheck && noStock) throw ParameterError("--cross-check needs a --stock");
+  if (!(o.crossTolerance > 0.0 && o.crossTolerance < 1.0))
+    throw ParameterError("--cross-check-tolerance: expected a fraction in (0, 1)");
+  std::unique_ptr<Stock> stockStore, otherStore;
+  auto* voxelStock = static_cast<VoxelStock*>(nullptr);
   if (!noStock) {
-    VoxelStock& stock = *stockStore;
+    stockStore = makeStock(o.stock, o.stockModel, voxel, sys);
+    if (o.crossCheck)
+      otherStore = makeStock(o.stock, o.stockModel == "dexel" ? "voxel" : "dexel", voxel, sys);
+    voxelStock = dynamic_cast<VoxelStock*>(stockStore.get());
+  }
+  if (!noStock) {
+    Stock& stock = *stockStore;
     // Does the cutter ever meet the stock?
     const Box3 sb = stock.bounds();
     bool meets = false;
@@ -158,7 +175,7 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
                            formatQuantity(sb.max.x(), Dimension::Length, sys) + ", " +
                            formatQuantity(sb.max.y(), Dimension::Length, sys) + ", " +
                            formatQuantity(sb.max.z(), Dimension::Length, sys) + ")");
-    stock.captureRemoved(true);
+    if (voxelStock) voxelStock->captureRemoved(true);
   }
 
   const bool tty = isatty(2) && !o.quiet;
@@ -174,6 +191,34 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
     };
   const SimulationResult r = noStock ? analyticSteps(path, cutter, so, o.materialSide != "left")
                                      : simulate(path, cutter, *stockStore, so);
+  // The cross-check: the same steps through the other stock model, compared per step. A
+  // step differs when its volumes differ by more than the tolerance of the larger, plus a
+  // floor of four cells (steps that remove almost nothing differ by rounding alone).
+  SimulationResult other;
+  std::vector<char> differs;
+  std::vector<std::size_t> differing;
+  double worstCross = 0.0;
+  const std::string otherModel = o.stockModel == "dexel" ? "voxel" : "dexel";
+  if (o.crossCheck) {
+    SimulationOptions oo = so;
+    oo.progress = nullptr;
+    other = simulate(path, cutter, *otherStore, oo);
+    const double floor = 4.0 * voxel * voxel * voxel;
+    differs.assign(r.steps.size(), 0);
+    for (std::size_t i = 0; i < r.steps.size(); ++i) {
+      const double a = r.steps[i].removed, b = other.steps[i].removed;
+      const double gap = std::abs(a - b);
+      if (std::max(a, b) > floor) worstCross = std::max(worstCross, gap / std::max(a, b));
+      if (gap > o.crossTolerance * std::max(a, b) + floor) {
+        differs[i] = 1;
+        differing.push_back(i);
+      }
+    }
+    std::stable_sort(differing.begin(), differing.end(), [&](std::size_t x, std::size_t y) {
+      return std::abs(r.steps[x].removed - other.steps[x].removed) >
+             std::abs(r.steps[y].removed - other.steps[y].removed);
+    });
+  }
   // The schedule and the re-fed program are made before any output is written.
   Schedule plan;
   std::string refed;
@@ -204,7 +249,7 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
       ",voxels_changed" +
       (o.schedule ? ",feed_scheduled_" + F + ",binding,mrr_scheduled_" + Q + ",acceleration_" + A
                   : std::string()) +
-      "\n";
+      (o.crossCheck ? ",removed_" + otherModel + "_" + V + ",cross_check" : std::string()) + "\n";
   for (std::size_t i = 0; i < r.steps.size(); ++i) {
     const StepRecord& s = r.steps[i];
     csv +=
@@ -223,6 +268,9 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
                    D(s.feed > 0 ? s.mrr * plan.feed[i] / s.feed : 0.0, Dimension::VolumeRate) +
                    "," + D(accelerationAt(i), Dimension::Acceleration)
              : std::string()) +
+        (o.crossCheck ? "," + D(other.steps[i].removed, Dimension::Volume) +
+                            (differs[i] ? ",differs" : ",agrees")
+                      : std::string()) +
         "\n";
   }
   writeAtomically(dir / "steps.csv", csv);
@@ -258,6 +306,8 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
   j["cutting_time_s"] = r.cuttingTime;
   j["run_time_s"] = r.seconds;
   j["steps_per_second"] = r.seconds > 0 ? static_cast<double>(r.steps.size()) / r.seconds : 0.0;
+  j["stock_model"] = noStock ? std::string("none") : o.stockModel;
+  j["stock_memory_bytes"] = noStock ? std::size_t(0) : stockStore->memoryBytes();
   j["voxels_changed"] = r.voxelsChanged;
   j["voxels_changed_per_second"] =
       r.seconds > 0 ? static_cast<double>(r.voxelsChanged) / r.seconds : 0.0;
@@ -281,6 +331,30 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
                        {"analytic", toDisplay(d.analytic, Dimension::VolumeRate, sys)},
                        {"relative", d.relative}});
   j["largest_differences"] = largest;
+  if (o.crossCheck) {
+    ordered_json places = ordered_json::array();
+    for (std::size_t k = 0; k < differing.size() && k < 20; ++k) {
+      const std::size_t i = differing[k];
+      places.push_back(
+          {{"step", i},
+           {"line", r.steps[i].line},
+           {"removed", toDisplay(r.steps[i].removed, Dimension::Volume, sys)},
+           {"removed_" + otherModel, toDisplay(other.steps[i].removed, Dimension::Volume, sys)}});
+    }
+    j["cross_check"] = {
+        {"model", o.stockModel},
+        {"other_model", otherModel},
+        {"tolerance_relative", o.crossTolerance},
+        {"floor_volume", toDisplay(4.0 * voxel * voxel * voxel, Dimension::Volume, sys)},
+        {"steps", r.steps.size()},
+        {"steps_differing", differing.size()},
+        {"worst_relative", worstCross},
+        {"removed_" + otherModel, toDisplay(other.removed, Dimension::Volume, sys)},
+        {"removed_relative_difference", r.removed > 0 ? other.removed / r.removed - 1.0 : 0.0},
+        {"run_time_" + otherModel + "_s", other.seconds},
+        {"memory_bytes_" + otherModel, otherStore->memoryBytes()},
+        {"largest_differences", places}};
+  }
   j["unit_labels"] = {{"length", std::string(unitLabel(Dimension::Length, sys))},
                       {"volume", std::string(unitLabel(Dimension::Volume, sys))},
                       {"mrr", std::string(unitLabel(Dimension::VolumeRate, sys))},
@@ -353,10 +427,15 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
     std::fprintf(stderr, "engage: warning: plots not drawn: %s\n", e.what());
   }
   std::size_t open = 0;
-  if (!noStock) {
-    stockStore->writeRemovedVdb((dir / "removed.vdb").string());
-    stockStore->writeStockVdb((dir / "stock.vdb").string());
-    open = stockStore->writeStl((dir / "stock.stl").string());
+  if (voxelStock) {
+    voxelStock->writeRemovedVdb((dir / "removed.vdb").string());
+    voxelStock->writeStockVdb((dir / "stock.vdb").string());
+    open = voxelStock->writeStl((dir / "stock.stl").string());
+  } else if (!noStock) {
+    // A dexel stock: its material as voxel fractions for the same viewers (no removed.vdb).
+    const VoxelStock shown = VoxelStock::fromDexels(static_cast<const DexelStock&>(*stockStore));
+    shown.writeStockVdb((dir / "stock.vdb").string());
+    open = shown.writeStl((dir / "stock.stl").string());
   }
 
   std::string report;
@@ -384,6 +463,17 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
             r.straight.steps, 100 * r.straight.meanRelative, r.concave.steps,
             100 * r.concave.meanRelative, r.convex.steps, 100 * r.convex.meanRelative);
   }
+  if (o.crossCheck)
+    appendf(report,
+            "cross-check against the %s stock: %zu of %zu steps differ by more than %.1f %% "
+            "(worst %.2f %%%s), total removed differs by %.3f %% (%s run %.2f s)\n",
+            otherModel.c_str(), differing.size(), r.steps.size(), 100 * o.crossTolerance,
+            100 * worstCross,
+            differing.empty()
+                ? ""
+                : (", largest at line " + std::to_string(r.steps[differing.front()].line)).c_str(),
+            r.removed > 0 ? 100 * (other.removed / r.removed - 1.0) : 0.0, otherModel.c_str(),
+            other.seconds);
   if (r.rapidRemoved > 0.0)
     appendf(report, "warning: rapids removed %s of material (a crash on a machine)\n",
             formatQuantity(r.rapidRemoved, Dimension::Volume, sys).c_str());
@@ -404,7 +494,10 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
   const std::string programName =
       o.schedule ? "," + std::filesystem::path(o.program).filename().string() : "";
   appendf(report, "wrote %s/{steps.csv,summary.json%s%s%s}\n", o.out.c_str(),
-          noStock ? "" : ",removed.vdb,stock.vdb,stock.stl", programName.c_str(), plotted.c_str());
+          noStock      ? ""
+          : voxelStock ? ",removed.vdb,stock.vdb,stock.stl"
+                       : ",stock.vdb,stock.stl",
+          programName.c_str(), plotted.c_str());
   SimulateOutcome outcome;
   outcome.path = path;
   outcome.sim = r;
@@ -439,6 +532,15 @@ CLI::App* addCommon(CLI::App& app, const char* name, const char* help, SimulateO
   cmd->add_option("--units", o.units, "report units: mm or in (default: the program's)")
       ->check(CLI::IsMember({"mm", "in"}));
   cmd->add_option("--tool-table", o.toolTable, "LinuxCNC tool table for G43");
+  cmd->add_option("--stock-model", o.stockModel,
+                  "voxel (volume fractions) or dexel (vertical rays); --voxel sets the ray spacing")
+      ->check(CLI::IsMember({"voxel", "dexel"}))
+      ->capture_default_str();
+  cmd->add_flag("--cross-check", o.crossCheck,
+                "also run the other stock model and report the steps where they disagree");
+  cmd->add_option("--cross-check-tolerance", o.crossTolerance,
+                  "relative per-step difference allowed by --cross-check")
+      ->capture_default_str();
   cmd->add_flag("--quiet", o.quiet, "no progress on the terminal");
   return cmd;
 }

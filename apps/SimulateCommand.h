@@ -45,6 +45,9 @@ struct SimulateOptions {
   std::string model = "measured";
   /// Without a stock: the side of the path the stock is on, "right" (climb with M3) or "left".
   std::string materialSide;
+  std::string stockModel = "voxel";  ///< "voxel" or "dexel"
+  bool crossCheck = false;           ///< also run the other stock model and compare per step
+  double crossTolerance = 0.03;      ///< relative per-step difference the cross-check allows
   /// Prefix of the progress line on a terminal.
   std::string progressLabel = "simulate";
 };

@@ -250,8 +250,13 @@ Removal DexelStock::remove(const Sweep& sweep, int, double) {
   const Box3 sb = sweep.bounds();
   const StepPath& path = sweep.path();
   const AptCutter& cutter = sweep.cutter();
-  const bool flat = std::abs(path.end.z() - path.start.z()) < 1e-12 &&
-                    path.kind != StepPath::Kind::Polyline && widensUpwards(cutter);
+  // Closed form: steps that keep their height, and plunges and retracts (the cutter from its
+  // lowest to its highest position), of cutters that widen upwards.
+  const bool vertical = path.kind == StepPath::Kind::Line &&
+                        (path.end.head<2>() - path.start.head<2>()).norm() < 1e-12;
+  const bool flat = (vertical || (std::abs(path.end.z() - path.start.z()) < 1e-12 &&
+                                  path.kind != StepPath::Kind::Polyline)) &&
+                    widensUpwards(cutter);
   const int i0 = std::max(0, static_cast<int>(std::floor((sb.min.x() - x0_) / h_ - 0.5)));
   const int i1 = std::min(nx_ - 1, static_cast<int>(std::ceil((sb.max.x() - x0_) / h_ - 0.5)));
   const int j0 = std::max(0, static_cast<int>(std::floor((sb.min.y() - y0_) / h_ - 0.5)));
@@ -287,7 +292,8 @@ Removal DexelStock::remove(const Sweep& sweep, int, double) {
       if (flat) {
         const double rho = pathDistance(path, q);
         if (rho - 0.5 * h_ > cutter.maxRadius()) continue;
-        const double z = path.start.z(), top = z + cutter.height();
+        const double z = std::min(path.start.z(), path.end.z());
+        const double top = std::max(path.start.z(), path.end.z()) + cutter.height();
         // Full cover where the radius exceeds rho + h/2, none below rho - h/2; across the band
         // between (a vertical wall: the whole height) the cover of its pieces' middles.
         const double zFull =
@@ -315,7 +321,9 @@ Removal DexelStock::remove(const Sweep& sweep, int, double) {
         bool inside = dz < 0.0;
         double entry = lo;
         while (z < hi) {
-          const double step = std::max(std::abs(dz), 0.25 * kZTolerance);
+          // At least h/8 a step: the distance only shrinks towards the surface (a bound),
+          // and a sliver thinner than that is below the model's resolution anyway.
+          const double step = std::max(std::abs(dz), 0.125 * h_);
           double z2 = std::min(z + step, hi);
           const double d2 = d(z2);
           if ((d2 < 0.0) != inside) {

@@ -12,10 +12,11 @@
 /// by the share of their area inside it.
 ///
 /// A step's swept solid meets a ray in an interval: for steps that keep their height (lines
-/// and arcs in XY) of cutters whose radius never shrinks upwards, in closed form (from the
+/// and arcs in XY) and vertical ones (plunges, retracts) of cutters whose radius never
+/// shrinks upwards, in closed form (from the
 /// distance of the ray to the step's path and the profile's radius over height, with the
 /// outline's coverage over the band of heights where it crosses the column); for every other
-/// step (plunges, ramps, helices), all or nothing, by marching the sweep's signed distance up
+/// step (ramps, helices, arcs out of XY), all or nothing, by marching the sweep's signed distance up
 /// the ray (steps of the distance itself, which never cross the surface) and bisecting its
 /// sign changes.
 
@@ -61,7 +62,7 @@ class DexelStock : public Stock {
   /// Material intervals in all rays (a measure of memory and of the stock's complexity).
   std::size_t segments() const;
   /// Bytes used by the rays.
-  std::size_t memoryBytes() const;
+  std::size_t memoryBytes() const override;
 
  private:
   DexelStock(const Box3& box, double spacing);

@@ -8,6 +8,8 @@
 #include "cutters/AptCutter.h"
 #include "cutters/Sweep.h"
 
+#include <cstddef>
+
 namespace engage {
 
 /// What one removal did: measured volume and engagement, and the work it cost.
@@ -33,6 +35,8 @@ class Stock {
   virtual double volume() const = 0;
   /// Bounds of the material, mm.
   virtual Box3 bounds() const = 0;
+  /// Bytes the model holds.
+  virtual std::size_t memoryBytes() const = 0;
   /// Remove one step's swept solid; `step` and `dtSeconds` label it (for capture grids).
   virtual Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) = 0;
 };

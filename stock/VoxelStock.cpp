@@ -1,5 +1,7 @@
 #include "stock/VoxelStock.h"
 
+#include "stock/DexelStock.h"
+
 #include "cutters/Error.h"
 
 #include "stock/TriangleMesh.h"
@@ -131,6 +133,53 @@ VoxelStock::VoxelStock(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 VoxelStock::VoxelStock(VoxelStock&&) noexcept = default;
 VoxelStock& VoxelStock::operator=(VoxelStock&&) noexcept = default;
 VoxelStock::~VoxelStock() = default;
+
+VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
+  initVdb();
+  const double h = d.resolution();
+  auto impl = std::make_unique<Impl>();
+  impl->h = h;
+  impl->grid = FloatGrid::create(0.0f);
+  impl->grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+  impl->grid->setName("stock");
+  impl->grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+  // Column (i, j) covers [x0 + i h, x0 + (i + 1) h] (and likewise in y); voxel c covers
+  // [(c - 1/2) h, (c + 1/2) h]. Each voxel gets the material of the columns it overlaps:
+  // area share x length share x the interval's share x the column's weight.
+  auto acc = impl->grid->getAccessor();
+  auto spread = [&](double a0, int& c0, double& w0) {  // the voxels over [a0, a0 + h]
+    c0 = static_cast<int>(std::floor(a0 / h + 0.5));
+    w0 = ((c0 + 0.5) * h - a0) / h;  // share of the column in voxel c0; the rest in c0 + 1
+  };
+  for (int j = 0; j < d.raysY(); ++j)
+    for (int i = 0; i < d.raysX(); ++i) {
+      const double weight = d.weight(i, j);
+      if (weight <= 0.0) continue;
+      int cx = 0, cy = 0;
+      double wx = 0.0, wy = 0.0;
+      spread(d.originX() + i * h, cx, wx);
+      spread(d.originY() + j * h, cy, wy);
+      for (const DexelStock::Interval& iv : d.ray(i, j)) {
+        const int k0 = static_cast<int>(std::floor(iv.z0 / h + 0.5));
+        const int k1 = static_cast<int>(std::floor(iv.z1 / h + 0.5));
+        for (int k = k0; k <= k1; ++k) {
+          const double z = std::max(0.0, std::min(iv.z1, (k + 0.5) * h) -
+                                             std::max(iv.z0, (k - 0.5) * h)) / h;
+          if (z <= 0.0) continue;
+          const double m = z * iv.f * weight;
+          for (int a = 0; a < 2; ++a)
+            for (int b = 0; b < 2; ++b) {
+              const double share = (a ? 1.0 - wx : wx) * (b ? 1.0 - wy : wy);
+              if (share <= 0.0) continue;
+              const Coord c(cx + a, cy + b, k);
+              acc.setValue(c, static_cast<float>(std::min(1.0, acc.getValue(c) + m * share)));
+            }
+        }
+      }
+    }
+  impl->grid->tree().prune();
+  return VoxelStock(std::move(impl));
+}
 
 VoxelStock VoxelStock::box(const Box3& b, double h) {
   for (int a = 0; a < 3; ++a)

@@ -25,6 +25,8 @@
 
 namespace engage {
 
+class DexelStock;
+
 /// Sparse-voxel stock of volume fractions.
 class VoxelStock : public Stock {
  public:
@@ -36,6 +38,10 @@ class VoxelStock : public Stock {
   /// Error for a missing or unreadable file, ParameterError for an open mesh (naming the
   /// number of boundary edges) or a voxel size that would not fit in memory.
   static VoxelStock fromMesh(const std::string& path, double voxelSize);
+  /// The material of a dexel stock as volume fractions on voxels of its ray spacing (for
+  /// stock.vdb and stock.stl of dexel runs): each voxel gets the share of the columns it
+  /// overlaps. The volume is kept exactly (up to 32-bit floats).
+  static VoxelStock fromDexels(const DexelStock& dexels);
 
   VoxelStock(VoxelStock&&) noexcept;
   VoxelStock& operator=(VoxelStock&&) noexcept;
@@ -49,7 +55,7 @@ class VoxelStock : public Stock {
   /// Bounds of the material, mm (empty box when no material is left).
   Box3 bounds() const override;
   /// Bytes used by the grids (the stock and, when captured, the removed-volume grids).
-  std::size_t memoryBytes() const;
+  std::size_t memoryBytes() const override;
 
   /// Record, for every voxel that loses material, how much it lost, the index of the first
   /// step that removed material from it, and that step's MRR (for removed.vdb).

@@ -10,6 +10,7 @@
 // too. Bounds are about 1.5 x the worst measured (written beside them).
 
 #include "stock/DexelStock.h"
+#include "stock/VoxelStock.h"
 #include "cutters/CrossSection.h"
 #include "cutters/Error.h"
 
@@ -192,4 +193,19 @@ TEST_CASE("dexel: a stock from a closed mesh, by casting the rays through it", "
   CHECK(s.bounds().min.z() == Approx(-10.0).margin(1e-5));
   CHECK_THROWS_WITH(DexelStock::fromMesh(ENGAGE_SOURCE_DIR "/data/stock/open_box.stl", 0.3),
                     Contains("is not closed"));
+}
+
+TEST_CASE("dexel: converted to voxels for stock.vdb and stock.stl, the volume kept", "[stock]") {
+  // A box whose faces fall between rays and voxels, with a slot cut at 30 degrees: the
+  // voxels' fractions sum to the dexels' volume (32-bit floats: 1e-6 relative).
+  Box3 b;
+  b.min = {-10.07, -8.13, -5.0};
+  b.max = {10.11, 8.02, 0.0};
+  DexelStock s = DexelStock::box(b, 0.3);
+  pass(s, AptCutter::ball(6.0, 18.0), Eigen::Vector3d(0, 0, -2) - 8.0 * kDir, kDir, 16.0, 0.75);
+  const VoxelStock v = VoxelStock::fromDexels(s);
+  CHECK(v.voxelSize() == 0.3);
+  CHECK(v.volume() == Approx(s.volume()).epsilon(1e-6));
+  CHECK(v.bounds().min.x() <= -10.07 + 0.3);
+  CHECK(v.bounds().max.y() >= 8.02 - 0.3);
 }
