@@ -9,6 +9,8 @@
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/LevelSetRebuild.h>
+#include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/VolumeToMesh.h>
@@ -470,10 +472,19 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
 }
 
 void VoxelStock::writeStockVdb(const std::string& path) const {
+  // Beside the fractions, the surface as a narrow-band level set (negative inside, 3 voxels
+  // each side): the 0.5 iso-surface of the fractions, rebuilt (values negated so that the
+  // material lies below the iso-value, as a level set's inside does).
+  FloatGrid::Ptr negated = impl_->grid->deepCopy();
+  openvdb::tools::foreach(negated->beginValueOn(),
+                          [](const FloatGrid::ValueOnIter& it) { it.setValue(-*it); });
+  FloatGrid::Ptr surface = openvdb::tools::levelSetRebuild(*negated, -0.5f, 3.0f);
+  surface->setName("surface");
+  surface->setGridClass(openvdb::GRID_LEVEL_SET);
   const std::string tmp = path + ".part";
   {
     openvdb::io::File file(tmp);
-    openvdb::GridPtrVec grids{impl_->grid};
+    openvdb::GridPtrVec grids{impl_->grid, surface};
     file.write(grids);
     file.close();
   }
