@@ -16,9 +16,9 @@
 /// shrinks upwards, in closed form (from the
 /// distance of the ray to the step's path and the profile's radius over height, with the
 /// outline's coverage over the band of heights where it crosses the column); for every other
-/// step (ramps, helices, arcs out of XY), all or nothing, by marching the sweep's signed distance up
-/// the ray (steps of the distance itself, which never cross the surface) and bisecting its
-/// sign changes.
+/// step (ramps, helices, arcs out of XY), all or nothing, by marching the sweep's signed distance
+/// up the ray (steps of the distance itself, which never cross the surface) and bisecting its sign
+/// changes.
 
 #include "cutters/AptCutter.h"
 #include "cutters/Sweep.h"

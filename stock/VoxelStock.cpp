@@ -10,9 +10,9 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/LevelSetRebuild.h>
-#include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <tbb/parallel_for.h>
@@ -165,8 +165,8 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
         const int k0 = static_cast<int>(std::floor(iv.z0 / h + 0.5));
         const int k1 = static_cast<int>(std::floor(iv.z1 / h + 0.5));
         for (int k = k0; k <= k1; ++k) {
-          const double z = std::max(0.0, std::min(iv.z1, (k + 0.5) * h) -
-                                             std::max(iv.z0, (k - 0.5) * h)) / h;
+          const double z =
+              std::max(0.0, std::min(iv.z1, (k + 0.5) * h) - std::max(iv.z0, (k - 0.5) * h)) / h;
           if (z <= 0.0) continue;
           const double m = z * iv.f * weight;
           for (int a = 0; a < 2; ++a)
@@ -476,8 +476,8 @@ void VoxelStock::writeStockVdb(const std::string& path) const {
   // each side): the 0.5 iso-surface of the fractions, rebuilt (values negated so that the
   // material lies below the iso-value, as a level set's inside does).
   FloatGrid::Ptr negated = impl_->grid->deepCopy();
-  openvdb::tools::foreach(negated->beginValueOn(),
-                          [](const FloatGrid::ValueOnIter& it) { it.setValue(-*it); });
+  openvdb::tools::foreach (negated->beginValueOn(),
+                           [](const FloatGrid::ValueOnIter& it) { it.setValue(-*it); });
   FloatGrid::Ptr surface = openvdb::tools::levelSetRebuild(*negated, -0.5f, 3.0f);
   surface->setName("surface");
   surface->setGridClass(openvdb::GRID_LEVEL_SET);

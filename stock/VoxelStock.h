@@ -66,8 +66,8 @@ class VoxelStock : public Stock {
   Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) override;
 
   /// Write stock.vdb: grid "stock" (material fraction) and grid "surface" (the stock's
-  /// surface as a narrow-band level set, negative inside, 3 voxels each side). Written to a temporary name and
-  /// renamed when complete. Throws Error on I/O failure.
+  /// surface as a narrow-band level set, negative inside, 3 voxels each side). Written to a
+  /// temporary name and renamed when complete. Throws Error on I/O failure.
   void writeStockVdb(const std::string& path) const;
   /// Write removed.vdb: grids "removed" (fraction removed), "step" (int32, first step) and
   /// "mrr" (mm^3/min of that step). Requires captureRemoved(true) before the removals.

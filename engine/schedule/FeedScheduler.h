@@ -32,8 +32,8 @@ struct ScheduleOptions {
   /// The machine's rapid feed, mm/min (0: rapids are not timed); rapids run from standstill
   /// to standstill under the same acceleration and jerk limits.
   double rapidFeed = 0.0;
-  double minChange = 0.05;    ///< relative step between feed levels
-  double minSegment = 0.0;    ///< shortest run of one feed level along the path (0: one step)
+  double minChange = 0.05;  ///< relative step between feed levels
+  double minSegment = 0.0;  ///< shortest run of one feed level along the path (0: one step)
   /// Schedule from the analytic model of each step (paper Eq 21-23 through its MRR, with the
   /// step's curvature and the simulation's stepover/depth) instead of the measured MRR.
   bool analytic = false;
@@ -56,7 +56,7 @@ struct Schedule {
   FeedPlan plan;                 ///< per move: the pieces for GcodeWriter
   double timeBefore = 0.0;       ///< feed-move time with the programmed feeds, s
   double timeAfter = 0.0;        ///< with the scheduled feeds, s
-  double rapidTime = 0.0;        ///< rapids at ScheduleOptions::rapidFeed (the same before and after), s
+  double rapidTime = 0.0;  ///< rapids at ScheduleOptions::rapidFeed (the same before and after), s
   double maxAcceleration = 0.0;  ///< largest |Eq 24 acceleration| between scheduled steps, mm/s^2
   std::size_t fWords = 0;        ///< feed pieces in the plan
 };

@@ -10,9 +10,9 @@
 // too. Bounds are about 1.5 x the worst measured (written beside them).
 
 #include "stock/DexelStock.h"
-#include "stock/VoxelStock.h"
 #include "cutters/CrossSection.h"
 #include "cutters/Error.h"
+#include "stock/VoxelStock.h"
 
 #include <catch2/catch.hpp>
 

@@ -3,8 +3,8 @@
 #include "engine/schedule/FeedScheduler.h"
 
 #include "engine/gcode/GcodeReader.h"
-#include "stock/VoxelStock.h"
 #include "engine/model/EngagementModel.h"
+#include "stock/VoxelStock.h"
 
 #include <catch2/catch.hpp>
 
