@@ -25,6 +25,11 @@ using Intervals = std::vector<Interval>;
 /// covers); returns the material removed, mm (length x share).
 double cut(Intervals& iv, double a, double b, double keep) {
   if (!(b > a)) return 0.0;
+  // Most calls change nothing (air, or material already cut as far): no copy then.
+  if (std::none_of(iv.begin(), iv.end(), [&](const Interval& x) {
+        return x.z1 > a && x.z0 < b && x.f > keep;
+      }))
+    return 0.0;
   double removed = 0.0;
   Intervals out;
   out.reserve(iv.size() + 2);
@@ -292,6 +297,12 @@ Removal DexelStock::remove(const Sweep& sweep, int, double) {
       if (flat) {
         const double rho = pathDistance(path, q);
         if (rho - 0.5 * h_ > cutter.maxRadius()) continue;
+        // Below the ray's highest material the cutter is narrower than the ray is far: the
+        // step cannot reach it (one radius instead of the profile's inversion).
+        const double zLowest = std::min(path.start.z(), path.end.z());
+        if (ray.back().z1 <= zLowest ||
+            cutter.radiusAt(std::min(ray.back().z1 - zLowest, cutter.height())) < rho - 0.5 * h_)
+          continue;
         const double z = std::min(path.start.z(), path.end.z());
         const double top = std::max(path.start.z(), path.end.z()) + cutter.height();
         // Full cover where the radius exceeds rho + h/2, none below rho - h/2; across the band
