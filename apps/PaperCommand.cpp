@@ -265,6 +265,9 @@ Run simulatePocket(const Pocket& pocket, const ToolOptions& tool, const std::str
       if (run.first == steps.size()) run.first = i;
       run.last = i + 1;
     }
+  if (run.first >= run.last)
+    throw Error(pocket.program.string() + ": no feed steps after line " + std::to_string(from) +
+                ", where its wall pass should start");
   return run;
 }
 
@@ -380,6 +383,7 @@ ordered_json figure9(const fs::path& dir, const fs::path& programs, const PaperO
   std::vector<double> straight;
   for (std::size_t i = 0; i < r.s.size(); ++i)
     if (r.side[i] == PathSide::Straight) straight.push_back(r.mrr[i]);
+  if (straight.empty()) throw Error("Fig 9: the wall pass has no straight steps");
   const double nominal = median(straight);
   const double peak = *std::max_element(r.mrr.begin(), r.mrr.end());
   // Where the rise begins: the first step 2 % above nominal before the first peak.
