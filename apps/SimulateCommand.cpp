@@ -176,6 +176,7 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
                            formatQuantity(sb.max.y(), Dimension::Length, sys) + ", " +
                            formatQuantity(sb.max.z(), Dimension::Length, sys) + ")");
     if (voxelStock) voxelStock->captureRemoved(true);
+    if (auto* dexels = dynamic_cast<DexelStock*>(stockStore.get())) dexels->captureRemoved(true);
   }
 
   const bool tty = isatty(2) && !o.quiet;
@@ -432,8 +433,10 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
     voxelStock->writeStockVdb((dir / "stock.vdb").string());
     open = voxelStock->writeStl((dir / "stock.stl").string());
   } else if (!noStock) {
-    // A dexel stock: its material as voxel fractions for the same viewers (no removed.vdb).
-    const VoxelStock shown = VoxelStock::fromDexels(static_cast<const DexelStock&>(*stockStore));
+    // A dexel stock: its removal and its material as voxel fractions, for the same viewers.
+    const auto& dexels = static_cast<const DexelStock&>(*stockStore);
+    VoxelStock::writeRemovedVdb(dexels, (dir / "removed.vdb").string());
+    const VoxelStock shown = VoxelStock::fromDexels(dexels);
     shown.writeStockVdb((dir / "stock.vdb").string());
     open = shown.writeStl((dir / "stock.stl").string());
   }
@@ -494,10 +497,7 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
   const std::string programName =
       o.schedule ? "," + std::filesystem::path(o.program).filename().string() : "";
   appendf(report, "wrote %s/{steps.csv,summary.json%s%s%s}\n", o.out.c_str(),
-          noStock      ? ""
-          : voxelStock ? ",removed.vdb,stock.vdb,stock.stl"
-                       : ",stock.vdb,stock.stl",
-          programName.c_str(), plotted.c_str());
+          noStock ? "" : ",removed.vdb,stock.vdb,stock.stl", programName.c_str(), plotted.c_str());
   SimulateOutcome outcome;
   outcome.path = path;
   outcome.sim = r;

@@ -26,9 +26,8 @@ using Intervals = std::vector<Interval>;
 double cut(Intervals& iv, double a, double b, double keep) {
   if (!(b > a)) return 0.0;
   // Most calls change nothing (air, or material already cut as far): no copy then.
-  if (std::none_of(iv.begin(), iv.end(), [&](const Interval& x) {
-        return x.z1 > a && x.z0 < b && x.f > keep;
-      }))
+  if (std::none_of(iv.begin(), iv.end(),
+                   [&](const Interval& x) { return x.z1 > a && x.z0 < b && x.f > keep; }))
     return 0.0;
   double removed = 0.0;
   Intervals out;
@@ -251,7 +250,7 @@ std::size_t DexelStock::memoryBytes() const {
   return bytes;
 }
 
-Removal DexelStock::remove(const Sweep& sweep, int, double) {
+Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
   const Box3 sb = sweep.bounds();
   const StepPath& path = sweep.path();
   const AptCutter& cutter = sweep.cutter();
@@ -334,8 +333,8 @@ Removal DexelStock::remove(const Sweep& sweep, int, double) {
         while (z < hi) {
           // At least h/8 a step: the distance only shrinks towards the surface (a bound),
           // and a sliver thinner than that is below the model's resolution anyway.
-          const double step = std::max(std::abs(dz), 0.125 * h_);
-          double z2 = std::min(z + step, hi);
+          const double advance = std::max(std::abs(dz), 0.125 * h_);
+          double z2 = std::min(z + advance, hi);
           const double d2 = d(z2);
           if ((d2 < 0.0) != inside) {
             double a = z, b = z2;  // a sign change within [a, b]: bisect it
@@ -361,7 +360,18 @@ Removal DexelStock::remove(const Sweep& sweep, int, double) {
         for (const Interval& x : ray)
           if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f)
             cuts.push_back({q, std::max(x.z0, sx.z0), std::min(x.z1, sx.z1)});
-        removed += cut(ray, sx.z0, sx.z1, 1.0 - sx.f);
+        double zLo = sx.z1, zHi = sx.z0;
+        for (const Interval& x : ray)
+          if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f) {
+            zLo = std::min(zLo, std::max(x.z0, sx.z0));
+            zHi = std::max(zHi, std::min(x.z1, sx.z1));
+          }
+        const double lost = cut(ray, sx.z0, sx.z1, 1.0 - sx.f);
+        removed += lost;
+        // The capture: where this piece lost material, and the column's share it lost there
+        // on average (so that the captured volume is the removed volume).
+        if (capture_ && lost > 0.0 && zHi > zLo)
+          log_.push_back({i, j, zLo, zHi, lost / (zHi - zLo) * weight_[index(i, j)], step});
       }
       if (removed <= 0.0) continue;
       const double w = weight_[index(i, j)];
@@ -397,6 +407,12 @@ Removal DexelStock::remove(const Sweep& sweep, int, double) {
     }
     out.engagementRad =
         2.0 * kPi * static_cast<double>(std::count(bin.begin(), bin.end(), true)) / kAngleBins;
+  }
+  if (capture_ && step >= 0) {
+    if (stepMrr_.size() <= static_cast<std::size_t>(step))
+      stepMrr_.resize(static_cast<std::size_t>(step) + 1, 0.0);
+    stepMrr_[static_cast<std::size_t>(step)] =
+        dtSeconds > 0.0 ? out.volume / (dtSeconds / 60.0) : 0.0;
   }
   return out;
 }

@@ -59,6 +59,21 @@ class DexelStock : public Stock {
   /// The material intervals of ray (i, j), bottom up; and its column's share of the stock.
   const std::vector<Interval>& ray(int i, int j) const { return rays_[index(i, j)]; }
   double weight(int i, int j) const { return weight_[index(i, j)]; }
+  /// Record, for every removal, where each column lost material and which step removed it
+  /// (for removed.vdb, written by VoxelStock::writeRemovedVdb).
+  void captureRemoved(bool on) { capture_ = on; }
+  /// A piece of a column that lost material: heights (mm), the share of the column lost there
+  /// (times the column's weight), and the step.
+  struct Lost {
+    int i, j;
+    double z0, z1;
+    double share;
+    int step;
+  };
+  const std::vector<Lost>& removedLog() const { return log_; }
+  /// MRR of each captured step, mm^3/min (removed volume over its time).
+  const std::vector<double>& stepMrr() const { return stepMrr_; }
+
   /// Material intervals in all rays (a measure of memory and of the stock's complexity).
   std::size_t segments() const;
   /// Bytes used by the rays.
@@ -75,6 +90,9 @@ class DexelStock : public Stock {
   int nx_ = 0, ny_ = 0;
   std::vector<double> weight_;
   std::vector<std::vector<Interval>> rays_;
+  bool capture_ = false;
+  std::vector<Lost> log_;
+  std::vector<double> stepMrr_;
 };
 
 }  // namespace engage

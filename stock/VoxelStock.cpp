@@ -136,51 +136,96 @@ VoxelStock::VoxelStock(VoxelStock&&) noexcept = default;
 VoxelStock& VoxelStock::operator=(VoxelStock&&) noexcept = default;
 VoxelStock::~VoxelStock() = default;
 
-VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
-  initVdb();
+namespace {
+
+/// The voxels (of the dexels' spacing h) that the piece [z0, z1] of column (i, j) overlaps,
+/// with the share of each voxel's volume it fills: column (i, j) covers [x0 + i h,
+/// x0 + (i + 1) h] (and likewise in y), voxel c covers [(c - 1/2) h, (c + 1/2) h].
+template <typename Fn>
+void spreadColumn(const DexelStock& d, int i, int j, double z0, double z1, Fn&& fn) {
   const double h = d.resolution();
-  auto impl = std::make_unique<Impl>();
-  impl->h = h;
-  impl->grid = FloatGrid::create(0.0f);
-  impl->grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
-  impl->grid->setName("stock");
-  impl->grid->setGridClass(openvdb::GRID_FOG_VOLUME);
-  // Column (i, j) covers [x0 + i h, x0 + (i + 1) h] (and likewise in y); voxel c covers
-  // [(c - 1/2) h, (c + 1/2) h]. Each voxel gets the material of the columns it overlaps:
-  // area share x length share x the interval's share x the column's weight.
-  auto acc = impl->grid->getAccessor();
-  auto spread = [&](double a0, int& c0, double& w0) {  // the voxels over [a0, a0 + h]
+  auto first = [&](double a0, int& c0, double& w0) {  // the voxels over [a0, a0 + h]
     c0 = static_cast<int>(std::floor(a0 / h + 0.5));
     w0 = ((c0 + 0.5) * h - a0) / h;  // share of the column in voxel c0; the rest in c0 + 1
   };
+  int cx = 0, cy = 0;
+  double wx = 0.0, wy = 0.0;
+  first(d.originX() + i * h, cx, wx);
+  first(d.originY() + j * h, cy, wy);
+  const int k0 = static_cast<int>(std::floor(z0 / h + 0.5));
+  const int k1 = static_cast<int>(std::floor(z1 / h + 0.5));
+  for (int k = k0; k <= k1; ++k) {
+    const double z = std::max(0.0, std::min(z1, (k + 0.5) * h) - std::max(z0, (k - 0.5) * h)) / h;
+    if (z <= 0.0) continue;
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 2; ++b) {
+        const double share = (a ? 1.0 - wx : wx) * (b ? 1.0 - wy : wy);
+        if (share > 0.0) fn(Coord(cx + a, cy + b, k), z * share);
+      }
+  }
+}
+
+}  // namespace
+
+VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
+  initVdb();
+  auto impl = std::make_unique<Impl>();
+  impl->h = d.resolution();
+  impl->grid = FloatGrid::create(0.0f);
+  impl->grid->setTransform(openvdb::math::Transform::createLinearTransform(impl->h));
+  impl->grid->setName("stock");
+  impl->grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+  // Each voxel gets the material of the columns it overlaps: volume share x the interval's
+  // share x the column's weight.
+  auto acc = impl->grid->getAccessor();
   for (int j = 0; j < d.raysY(); ++j)
     for (int i = 0; i < d.raysX(); ++i) {
       const double weight = d.weight(i, j);
       if (weight <= 0.0) continue;
-      int cx = 0, cy = 0;
-      double wx = 0.0, wy = 0.0;
-      spread(d.originX() + i * h, cx, wx);
-      spread(d.originY() + j * h, cy, wy);
-      for (const DexelStock::Interval& iv : d.ray(i, j)) {
-        const int k0 = static_cast<int>(std::floor(iv.z0 / h + 0.5));
-        const int k1 = static_cast<int>(std::floor(iv.z1 / h + 0.5));
-        for (int k = k0; k <= k1; ++k) {
-          const double z =
-              std::max(0.0, std::min(iv.z1, (k + 0.5) * h) - std::max(iv.z0, (k - 0.5) * h)) / h;
-          if (z <= 0.0) continue;
-          const double m = z * iv.f * weight;
-          for (int a = 0; a < 2; ++a)
-            for (int b = 0; b < 2; ++b) {
-              const double share = (a ? 1.0 - wx : wx) * (b ? 1.0 - wy : wy);
-              if (share <= 0.0) continue;
-              const Coord c(cx + a, cy + b, k);
-              acc.setValue(c, static_cast<float>(std::min(1.0, acc.getValue(c) + m * share)));
-            }
-        }
-      }
+      for (const DexelStock::Interval& iv : d.ray(i, j))
+        spreadColumn(d, i, j, iv.z0, iv.z1, [&](const Coord& c, double share) {
+          acc.setValue(c,
+                       static_cast<float>(std::min(1.0, acc.getValue(c) + share * iv.f * weight)));
+        });
     }
   impl->grid->tree().prune();
   return VoxelStock(std::move(impl));
+}
+
+void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
+  initVdb();
+  const double h = d.resolution();
+  auto make = [&](auto grid, const char* name) {
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    grid->setName(name);
+    return grid;
+  };
+  FloatGrid::Ptr removed = make(FloatGrid::create(0.0f), "removed");
+  removed->setGridClass(openvdb::GRID_FOG_VOLUME);
+  Int32Grid::Ptr step = make(Int32Grid::create(-1), "step");
+  FloatGrid::Ptr mrr = make(FloatGrid::create(0.0f), "mrr");
+  auto racc = removed->getAccessor();
+  auto sacc = step->getAccessor();
+  auto macc = mrr->getAccessor();
+  const std::vector<double>& stepMrr = d.stepMrr();
+  // The log is in step order: the first step to reach a voxel names it.
+  for (const DexelStock::Lost& l : d.removedLog())
+    spreadColumn(d, l.i, l.j, l.z0, l.z1, [&](const Coord& c, double share) {
+      racc.setValue(c, static_cast<float>(std::min(1.0, racc.getValue(c) + share * l.share)));
+      if (!sacc.isValueOn(c)) {
+        sacc.setValue(c, l.step);
+        const auto s = static_cast<std::size_t>(std::max(l.step, 0));
+        macc.setValue(c, static_cast<float>(s < stepMrr.size() ? stepMrr[s] : 0.0));
+      }
+    });
+  const std::string tmp = path + ".part";
+  {
+    openvdb::io::File file(tmp);
+    openvdb::GridPtrVec grids{removed, step, mrr};
+    file.write(grids);
+    file.close();
+  }
+  std::filesystem::rename(tmp, path);
 }
 
 VoxelStock VoxelStock::box(const Box3& b, double h) {

@@ -42,6 +42,9 @@ class VoxelStock : public Stock {
   /// stock.vdb and stock.stl of dexel runs): each voxel gets the share of the columns it
   /// overlaps. The volume is kept exactly (up to 32-bit floats).
   static VoxelStock fromDexels(const DexelStock& dexels);
+  /// Write a dexel run's removed.vdb (grids "removed", "step", "mrr" as writeRemovedVdb) from
+  /// its capture log (DexelStock::captureRemoved(true) before the removals).
+  static void writeRemovedVdb(const DexelStock& dexels, const std::string& path);
 
   VoxelStock(VoxelStock&&) noexcept;
   VoxelStock& operator=(VoxelStock&&) noexcept;
