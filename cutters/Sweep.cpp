@@ -54,6 +54,17 @@ Eigen::Vector3d StepPath::at(double u) const {
   return end;
 }
 
+Eigen::Vector2d StepPath::feedDirectionAtEnd() const {
+  Eigen::Vector3d tangent = end - at(std::max(0.0, 1.0 - 1e-3));
+  if (kind == Kind::ArcXY) {
+    const Eigen::Vector3d r = end - center;
+    tangent =
+        sweepRad >= 0 ? Eigen::Vector3d(-r.y(), r.x(), 0.0) : Eigen::Vector3d(r.y(), -r.x(), 0.0);
+  }
+  const Eigen::Vector2d u = tangent.head<2>();
+  return u.norm() < 1e-12 ? Eigen::Vector2d(1.0, 0.0) : Eigen::Vector2d(u.normalized());
+}
+
 Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
     : cutter_(cutter), path_(path) {
   if (!(resolution > 0.0)) throw ParameterError("sweep resolution must be positive");

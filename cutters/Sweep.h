@@ -37,6 +37,9 @@ struct StepPath {
 
   /// Tip position at parameter u in [0, 1] (arc length fraction for lines and arcs).
   Eigen::Vector3d at(double u) const;
+  /// Unit direction of travel in XY at the step's end (the arc's tangent for arcs); +X for
+  /// steps without horizontal motion (plunges), as a reference direction.
+  Eigen::Vector2d feedDirectionAtEnd() const;
 };
 
 /// The swept solid of one step.

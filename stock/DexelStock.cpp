@@ -1,6 +1,7 @@
 #include "stock/DexelStock.h"
 
 #include "cutters/Error.h"
+#include "cutters/Geometry.h"
 #include "stock/TriangleMesh.h"
 
 #include <unistd.h>
@@ -84,10 +85,7 @@ double pathDistance(const StepPath& p, const Eigen::Vector2d& q) {
     if (t <= std::abs(p.sweepRad)) return std::abs(v.norm() - r);
     return std::min((q - p.start.head<2>()).norm(), (q - p.end.head<2>()).norm());
   }
-  const Eigen::Vector2d a = p.start.head<2>(), d = p.end.head<2>() - a;
-  const double l2 = d.squaredNorm();
-  const double t = l2 > 0 ? std::clamp((q - a).dot(d) / l2, 0.0, 1.0) : 0.0;
-  return (a + t * d - q).norm();
+  return distanceToSegment(q, p.start.head<2>(), p.end.head<2>());
 }
 
 /// Does the cutter's radius never shrink upwards (so that a vertical line at distance rho
@@ -268,15 +266,7 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
 
   // Feed direction at the step's end, as the voxel stock takes it.
   const Eigen::Vector3d end = path.end;
-  Eigen::Vector3d tangent = path.end - path.at(std::max(0.0, 1.0 - 1e-3));
-  if (path.kind == StepPath::Kind::ArcXY) {
-    const Eigen::Vector3d r = path.end - path.center;
-    tangent = path.sweepRad >= 0 ? Eigen::Vector3d(-r.y(), r.x(), 0.0)
-                                 : Eigen::Vector3d(r.y(), -r.x(), 0.0);
-  }
-  Eigen::Vector2d u = tangent.head<2>();
-  if (u.norm() < 1e-12) u = Eigen::Vector2d(1.0, 0.0);
-  u.normalize();
+  const Eigen::Vector2d u = path.feedDirectionAtEnd();
   const Eigen::Vector2d n(-u.y(), u.x());
 
   Removal out;

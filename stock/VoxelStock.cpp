@@ -402,15 +402,7 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
   // Feed direction at the step's end, for the width and the engagement angle.
   const StepPath& path = sweep.path();
   const Eigen::Vector3d end = path.end;
-  Eigen::Vector3d tangent = path.end - path.at(std::max(0.0, 1.0 - 1e-3));
-  if (path.kind == StepPath::Kind::ArcXY) {
-    const Eigen::Vector3d r = path.end - path.center;
-    tangent = path.sweepRad >= 0 ? Eigen::Vector3d(-r.y(), r.x(), 0.0)
-                                 : Eigen::Vector3d(r.y(), -r.x(), 0.0);
-  }
-  Eigen::Vector2d u = tangent.head<2>();
-  if (u.norm() < 1e-12) u = Eigen::Vector2d(1.0, 0.0);  // a plunge: any reference direction
-  u.normalize();
+  const Eigen::Vector2d u = path.feedDirectionAtEnd();
   const Eigen::Vector2d n(-u.y(), u.x());
   const AptCutter& cutter = sweep.cutter();
   const double voxelVolume = h * h * h;

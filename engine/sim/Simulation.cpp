@@ -64,6 +64,22 @@ std::vector<Planned> planSteps(const Toolpath& path, double L) {
   return plan;
 }
 
+/// A step's record as far as its move says: where, how long, how fast (`arc` accumulates
+/// the path length).
+StepRecord plannedRecord(const Planned& p, const Move& m, const StepPath& sp, double& arc) {
+  StepRecord r;
+  r.move = p.move;
+  r.line = m.line;
+  r.kind = m.kind;
+  r.length = p.length;
+  arc += r.length;
+  r.arcLength = arc;
+  r.end = sp.end;
+  r.feed = m.kind == MoveKind::Rapid ? 0.0 : m.feed;
+  r.dt = r.feed > 0.0 ? r.length / r.feed * 60.0 : 0.0;
+  return r;
+}
+
 void refuseOtherAxes(const Toolpath& path) {
   for (const Move& m : path.moves)
     if (m.otherAxes)
@@ -127,16 +143,7 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& 
     const Planned& p = plan[si];
     const Move& m = path.moves[p.move];
     const StepPath sp = stepPath(m, p.t0, p.t1);
-    StepRecord r;
-    r.move = p.move;
-    r.line = m.line;
-    r.kind = m.kind;
-    r.length = p.length;
-    arc += r.length;
-    r.arcLength = arc;
-    r.end = sp.end;
-    r.feed = m.kind == MoveKind::Rapid ? 0.0 : m.feed;
-    r.dt = r.feed > 0.0 ? r.length / r.feed * 60.0 : 0.0;
+    StepRecord r = plannedRecord(p, m, sp, arc);
     const auto stepStart = std::chrono::steady_clock::now();
     const Removal rem = stock.remove(Sweep(cutter, sp, h), static_cast<int>(si), r.dt);
     if (options.timeSteps)
@@ -226,16 +233,7 @@ SimulationResult analyticSteps(const Toolpath& path, const AptCutter& cutter,
   for (const Planned& p : planSteps(path, L)) {
     const Move& m = path.moves[p.move];
     const StepPath sp = stepPath(m, p.t0, p.t1);
-    StepRecord r;
-    r.move = p.move;
-    r.line = m.line;
-    r.kind = m.kind;
-    r.length = p.length;
-    arc += r.length;
-    r.arcLength = arc;
-    r.end = sp.end;
-    r.feed = m.kind == MoveKind::Rapid ? 0.0 : m.feed;
-    r.dt = r.feed > 0.0 ? r.length / r.feed * 60.0 : 0.0;
+    StepRecord r = plannedRecord(p, m, sp, arc);
     r.removed = r.mrr = r.width = r.depth = r.engagementRad = kNaN;
     r.curvature = curvatureOf(m);
     out.cuttingTime += r.dt;

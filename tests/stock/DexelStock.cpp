@@ -13,6 +13,7 @@
 #include "cutters/CrossSection.h"
 #include "cutters/Error.h"
 #include "stock/VoxelStock.h"
+#include "tests/stock/StockTestSupport.h"
 
 #include <catch2/catch.hpp>
 
@@ -22,42 +23,9 @@
 using namespace engage;
 using Catch::Matchers::Contains;
 
+using namespace engage::test;
+
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-const Eigen::Vector3d kDir(std::cos(kPi / 6), std::sin(kPi / 6), 0.0);  // 30 deg to the grid
-const Eigen::Vector3d kSide(-std::sin(kPi / 6), std::cos(kPi / 6), 0.0);
-
-StepPath line(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  StepPath p;
-  p.start = a;
-  p.end = b;
-  return p;
-}
-
-std::vector<double> pass(Stock& stock, const AptCutter& c, const Eigen::Vector3d& a,
-                         const Eigen::Vector3d& dir, double length, double L) {
-  const double h = stock.resolution();
-  stock.remove(Sweep(c, line(a, a), h));
-  std::vector<double> v;
-  for (double s = 0.0; s + L <= length + 1e-9; s += L)
-    v.push_back(stock.remove(Sweep(c, line(a + s * dir, a + (s + L) * dir), h)).volume);
-  return v;
-}
-
-double worstRelative(const std::vector<double>& got, double expected, std::size_t skip = 1) {
-  double worst = 0.0;
-  for (std::size_t i = skip; i < got.size(); ++i)
-    worst = std::max(worst, std::abs(got[i] / expected - 1.0));
-  return worst;
-}
-
-double meanRelative(const std::vector<double>& got, double expected, std::size_t skip = 1) {
-  double sum = 0.0;
-  for (std::size_t i = skip; i < got.size(); ++i)
-    sum += got[i];
-  return sum / static_cast<double>(got.size() - skip) / expected - 1.0;
-}
 
 Box3 block(double half, double depth) {
   Box3 b;

@@ -12,6 +12,7 @@
 #include "stock/VoxelStock.h"
 #include "cutters/CrossSection.h"
 #include "cutters/Error.h"
+#include "tests/stock/StockTestSupport.h"
 
 #include <catch2/catch.hpp>
 
@@ -23,46 +24,7 @@
 using namespace engage;
 using Catch::Matchers::Contains;
 
-namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-const Eigen::Vector3d kDir(std::cos(kPi / 6), std::sin(kPi / 6), 0.0);  // 30 deg to the grid
-const Eigen::Vector3d kSide(-std::sin(kPi / 6), std::cos(kPi / 6), 0.0);
-
-StepPath line(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  StepPath p;
-  p.start = a;
-  p.end = b;
-  return p;
-}
-
-/// Volumes of the steps of a straight pass from `a` over `length` along `dir` in steps of L,
-/// after placing the tool at `a` (its own removal not counted).
-std::vector<double> pass(VoxelStock& stock, const AptCutter& c, const Eigen::Vector3d& a,
-                         const Eigen::Vector3d& dir, double length, double L) {
-  const double h = stock.voxelSize();
-  stock.remove(Sweep(c, line(a, a), h));
-  std::vector<double> v;
-  for (double s = 0.0; s + L <= length + 1e-9; s += L)
-    v.push_back(stock.remove(Sweep(c, line(a + s * dir, a + (s + L) * dir), h)).volume);
-  return v;
-}
-
-double worstRelative(const std::vector<double>& got, double expected, std::size_t skip = 1) {
-  double worst = 0.0;
-  for (std::size_t i = skip; i < got.size(); ++i)
-    worst = std::max(worst, std::abs(got[i] / expected - 1.0));
-  return worst;
-}
-
-double meanRelative(const std::vector<double>& got, double expected, std::size_t skip = 1) {
-  double sum = 0.0;
-  for (std::size_t i = skip; i < got.size(); ++i)
-    sum += got[i];
-  return sum / static_cast<double>(got.size() - skip) / expected - 1.0;
-}
-
-}  // namespace
+using namespace engage::test;
 
 TEST_CASE("a box stock holds exactly its volume, wherever its faces fall", "[stock]") {
   // Per-axis covered fractions sum to the box length / h exactly, so the product does too.

@@ -1,0 +1,51 @@
+#pragma once
+// Helpers shared by the stock tests (tests/stock/VoxelStock.cpp, tests/stock/DexelStock.cpp):
+// straight passes cut at 30 degrees to the grid, and the per-step errors against a closed form.
+
+#include "cutters/Sweep.h"
+#include "stock/Stock.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace engage::test {
+
+constexpr double kPi = 3.14159265358979323846;
+const Eigen::Vector3d kDir(std::cos(kPi / 6), std::sin(kPi / 6), 0.0);  // 30 deg to the grid
+const Eigen::Vector3d kSide(-std::sin(kPi / 6), std::cos(kPi / 6), 0.0);
+
+inline StepPath line(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  StepPath p;
+  p.start = a;
+  p.end = b;
+  return p;
+}
+
+/// Volumes of the steps of a straight pass from `a` over `length` along `dir` in steps of L,
+/// after placing the tool at `a` (its own removal not counted).
+inline std::vector<double> pass(Stock& stock, const AptCutter& c, const Eigen::Vector3d& a,
+                                const Eigen::Vector3d& dir, double length, double L) {
+  const double h = stock.resolution();
+  stock.remove(Sweep(c, line(a, a), h));
+  std::vector<double> v;
+  for (double s = 0.0; s + L <= length + 1e-9; s += L)
+    v.push_back(stock.remove(Sweep(c, line(a + s * dir, a + (s + L) * dir), h)).volume);
+  return v;
+}
+
+inline double worstRelative(const std::vector<double>& got, double expected, std::size_t skip = 1) {
+  double worst = 0.0;
+  for (std::size_t i = skip; i < got.size(); ++i)
+    worst = std::max(worst, std::abs(got[i] / expected - 1.0));
+  return worst;
+}
+
+inline double meanRelative(const std::vector<double>& got, double expected, std::size_t skip = 1) {
+  double sum = 0.0;
+  for (std::size_t i = skip; i < got.size(); ++i)
+    sum += got[i];
+  return sum / static_cast<double>(got.size() - skip) / expected - 1.0;
+}
+
+}  // namespace engage::test
