@@ -89,15 +89,10 @@ double pathDistance(const StepPath& p, const Eigen::Vector2d& q) {
 }
 
 /// Does the cutter's radius never shrink upwards (so that a vertical line at distance rho
-/// from its axis meets it in one interval from the profile's lowest height at rho up)?
+/// from its axis meets it in one interval from the profile's lowest height at rho up)? For
+/// the APT profile: unless its sides lean inward (beta < 0), the rule Sweep uses for convexity.
 bool widensUpwards(const AptCutter& c) {
-  double previous = c.radiusAt(0.0);
-  for (int k = 1; k <= 256; ++k) {
-    const double w = c.radiusAt(c.height() * k / 256.0);
-    if (w < previous - 1e-12) return false;
-    previous = w;
-  }
-  return true;
+  return c.parameters().taperAngleRad >= 0.0;
 }
 
 /// Lowest height above the tip where the cutter's radius reaches rho (rho <= max radius).
