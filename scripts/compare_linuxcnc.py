@@ -63,11 +63,28 @@ def linuxcnc_moves(path, tool_table):
             g92 = [v[0] * unit, v[1] * unit, v[2] * unit]
         elif name == "SELECT_PLANE":
             plane = "XY" if "XY" in args else ("XZ" if "XZ" in args else "YZ")
-        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STRAIGHT_PROBE"):
+        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
             v = numbers(args)
             end = [v[i] * unit + g5x[i] + g92[i] for i in range(3)]
             moves.append({"kind": "rapid" if name == "STRAIGHT_TRAVERSE" else "line", "end": end})
             pos = end
+        elif name == "STRAIGHT_PROBE":
+            # rs274 (saicanon.cc) takes the probe to its target and leaves it 0.254 mm back
+            # towards the start; engage writes that back-off as a second line.
+            v = numbers(args)
+            end = [v[i] * unit + g5x[i] + g92[i] for i in range(3)]
+            d = math.dist(end, pos)
+            if d > 0.0:
+                moves.append({"kind": "line", "end": end})
+                back = [end[i] + (pos[i] - end[i]) * 0.254 / d for i in range(3)]
+                moves.append({"kind": "line", "end": back})
+                pos = back
+        elif name == "RIGID_TAP":
+            # G33.1: in to the target and back out to the start.
+            v = numbers(args)
+            end = [v[i] * unit + g5x[i] + g92[i] for i in range(3)]
+            moves.append({"kind": "line", "end": end})
+            moves.append({"kind": "line", "end": list(pos)})
         elif name == "ARC_FEED":
             v = numbers(args)
             fe, se, fa, sa, rot, ae = v[0], v[1], v[2], v[3], int(v[4]), v[5]

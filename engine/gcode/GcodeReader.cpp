@@ -71,6 +71,13 @@ int gGroup(int g) {
     case 383:
     case 384:
     case 385:
+    case 700:
+    case 710:
+    case 711:
+    case 712:
+    case 720:
+    case 721:
+    case 722:
     case 730:
     case 760:
     case 800:
@@ -778,26 +785,24 @@ class Interpreter final : public gcode::ParameterSource {
           fail(column, "expected G40 (cutter compensation off), found " + codeName('G', code) +
                            ": cutter radius compensation is not interpreted; post the program with "
                            "compensation computed by the CAM system");
-        case 330:
-        case 331:
         case 760:
+          fail(column,
+               "expected a milling motion, found G76 (the lathe threading cycle is not "
+               "interpreted)");
+        case 700:
+        case 710:
+        case 711:
+        case 712:
+        case 720:
+        case 721:
+        case 722:
           fail(column, "expected a milling motion, found " + codeName('G', code) +
-                           " (spindle-synchronised threading is not interpreted)");
-        case 382:
-        case 383:
-        case 384:
-        case 385:
-          fail(column, "expected a milling motion, found " + codeName('G', code) +
-                           " (probing needs a machine)");
+                           " (lathe turning cycles G70-G72 are not interpreted)");
         case 860:
         case 870:
         case 880:
           fail(column, "expected one of the canned cycles G73 G81 G82 G83 G85 G89, found " +
                            codeName('G', code));
-        case 70:
-        case 80:
-          fail(column, "expected a milling program, found " + codeName('G', code) +
-                           " (lathe diameter mode)");
         case 432:
         case 520:
         case 171:
@@ -873,6 +878,10 @@ class Interpreter final : public gcode::ParameterSource {
                                               {590, 6}, {591, 7}, {592, 8}, {593, 9}};
       params_[5220] = systems.at(*g);
     }
+    // Lathe diameter mode (G7, from this line on): every X word is a diameter, halved here
+    // (motions, G92, G10 alike, as LinuxCNC does); arc centre words stay radii.
+    if (const auto g = w.gIn(15)) diameterMode_ = *g == 70;
+    if (diameterMode_ && w.has('X')) w.v[slot('X')] = w.get('X') / 2.0;
     if (const auto g = w.gIn(3)) incremental_ = *g == 910;
     if (const auto g = w.gIn(4)) arcIncremental_ = *g == 911;
     if (const auto g = w.gIn(10)) retractToR_ = *g == 990;
@@ -1181,9 +1190,75 @@ class Interpreter final : public gcode::ParameterSource {
       case 890:
         cycle(w, column, explicitMotion);
         return;
+      case 330:
+      case 331:
+        synchronised(w, column);
+        return;
+      case 382:
+      case 383:
+      case 384:
+      case 385:
+        probe(w, column);
+        return;
       default:
         fail(column, "expected a supported motion, found " + codeName('G', motion_));
     }
+  }
+
+  /// G33 (spindle-synchronised line) and G33.1 (rigid tapping: in to the target and back
+  /// out to the start). The feed is the pitch K times the spindle speed.
+  void synchronised(const Words& w, int column) {
+    const std::string name = codeName('G', motion_);
+    if (!w.has('K'))
+      fail(column,
+           "expected a K word (distance per spindle revolution) with " + name + ", found none");
+    if (!(w.get('K') > 0.0))
+      fail(w.column('K'),
+           "expected a positive K word with " + name + ", found K" + num(w.get('K')));
+    if (!(spindleSpeed_ > 0.0))
+      fail(column, "expected a spindle speed S > 0 for " + name + " (feed = K x S), found S0");
+    const double feed = w.get('K') * unit() * spindleSpeed_;
+    const Vector3d start = pos_;
+    emitLinear(MoveKind::Line, target(w, false), feed);
+    out_.moves.back().feedSource = FeedSource::Spindle;
+    if (motion_ == 331) {
+      emitLinear(MoveKind::Line, start, feed);
+      out_.moves.back().feedSource = FeedSource::Spindle;
+    }
+  }
+
+  /// G38.2-G38.5. Without a part to touch, the probe runs to its target and, as LinuxCNC's
+  /// stand-alone interpreter has it, stops 0.254 mm (0.010 in) back towards the start:
+  /// engage makes that back-off a feed move (a real probe also stops just past contact).
+  /// #5061-#5063 hold the target (program coordinates), #5070 = 0 (no contact), so probing loops
+  /// end as they do there.
+  void probe(const Words& w, int column) {
+    const std::string name = codeName('G', motion_);
+    if (feedMode_ == FeedMode::InverseTime)
+      fail(column,
+           "expected units-per-minute feed (G94) for " + name + ", found inverse time (G93)");
+    const Vector3d start = pos_;
+    const Vector3d end = target(w, false);
+    const double distance = (end - start).norm();
+    // LinuxCNC 2.9 refuses a zero-length probe only where no contact is an error (G38.2,
+    // G38.4); its stand-alone interpreter backs off any probe of non-zero length.
+    const bool mustTouch = motion_ == 382 || motion_ == 384;
+    if (distance == 0.0 && mustTouch)
+      fail(column,
+           "expected a probe target away from the start point, found the start point "
+           "itself");
+    if (distance > 0.0) {
+      const double feed = feedFor(distance, w, column);
+      const double backoff = inch_ ? 0.01 * kInch : 0.254;  // mm
+      emitLinear(MoveKind::Line, end, feed);
+      out_.moves.back().feedSource = FeedSource::Probe;
+      emitLinear(MoveKind::Line, end + (start - end) * (backoff / distance), feed);
+      out_.moves.back().feedSource = FeedSource::Probe;
+    }
+    const Vector3d program = (end - workOffset()) / unit();
+    for (int a = 0; a < 3; ++a)
+      params_[5061 + static_cast<std::size_t>(a)] = program[a];
+    params_[5070] = 0.0;
   }
 
   void arc(const Words& w, int column) {
@@ -1517,7 +1592,8 @@ class Interpreter final : public gcode::ParameterSource {
   bool arcIncremental_ = true;
   FeedMode feedMode_ = FeedMode::UnitsPerMinute;
   bool retractToR_ = false;
-  double feed_ = 0.0;  ///< mm/min (G94), mm/rev (G95) or 1/min (G93)
+  bool diameterMode_ = false;  ///< G7 (lathe diameter mode); G8 radius mode is the default
+  double feed_ = 0.0;          ///< mm/min (G94), mm/rev (G95) or 1/min (G93)
   double spindleSpeed_ = 0.0;
   int spindleDirection_ = 0;
   int tool_ = 0;

@@ -14,8 +14,12 @@
 ///
 /// Rotary and UVW words are read but stay out of the XYZ path (the move is marked otherAxes).
 ///
-/// Not supported, each a GcodeError naming the word: cutter compensation G41/G42, probing G38
-/// (its result needs a machine), threading G33/G76, lathe modes, boring cycles G86-G88, canned cycles outside G17, user M codes
+/// Probing G38.2-G38.5 runs to the target and backs off 0.254 mm, as LinuxCNC's stand-alone
+/// interpreter has it (#5061-#5063 = target, #5070 = 0); G33/G33.1 feed at K x S; G7 reads X
+/// words as diameters.
+///
+/// Not supported, each a GcodeError naming the word: cutter compensation G41/G42, the lathe
+/// cycles G70-G72 and G76, boring cycles G86-G88, canned cycles outside G17, user M codes
 /// M100-M199.
 
 #include "cutters/Error.h"

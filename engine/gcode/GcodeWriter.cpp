@@ -179,6 +179,10 @@ std::string writeProgram(const std::string& source, const Toolpath& path, const 
       throw Error("feed plan of move " + std::to_string(i + 1) + " (line " +
                   std::to_string(m.line) + "): a rapid has no feed");
     changes[i] = !(pieces.size() == 1 && sameFeed(pieces[0].feed, m.feed));
+    if (changes[i] && m.fixedFeed())
+      throw Error(path.files[static_cast<std::size_t>(m.file)] + ":" + std::to_string(m.line) +
+                  ": the feed of spindle-synchronised motion (G33, G33.1) or probing (G38.x) "
+                  "is not the F word's; engage cannot change it");
     anyChange = anyChange || changes[i];
   }
   if (!anyChange) return source;
@@ -230,7 +234,11 @@ std::string writeProgram(const std::string& source, const Toolpath& path, const 
       bool changed = false;
       for (std::size_t i : feedMoves)
         changed = changed || changes[i];
-      if (!feedMoves.empty() && (changed || dirty)) {
+      // G33's feed is K x S, not the modal F: its line keeps no F word of ours, and the
+      // original F is restored on the next line that feeds by F.
+      const bool spindleFeed =
+          !feedMoves.empty() && path.moves[feedMoves.front()].feedSource == FeedSource::Spindle;
+      if (!feedMoves.empty() && !spindleFeed && (changed || dirty)) {
         const Move& first = path.moves[feedMoves.front()];
         if (feedMoves.size() > 1 || first.kind == MoveKind::Spline) {
           // Canned cycles and splines: one F for the line.

@@ -20,6 +20,11 @@ enum class MoveKind { Rapid, Line, Arc, Spline };
 /// Arc plane (G17, G18, G19). Arcs turn about the plane's normal: +Z, +Y, +X respectively.
 enum class Plane { XY, XZ, YZ };
 
+/// Where a feed move's feed comes from: the F word (under the feed mode), the spindle
+/// (G33, G33.1: pitch K x spindle speed), or a probing move (G38.x: the F word, but the
+/// controller stops it on contact).
+enum class FeedSource { Word, Spindle, Probe };
+
 /// Feed mode the move was programmed in (G94, G93, G95).
 enum class FeedMode { UnitsPerMinute, InverseTime, UnitsPerRevolution };
 
@@ -58,6 +63,10 @@ struct Move {
   int line = 0;             ///< 1-based source line
   int block = 0;            ///< index into Toolpath::blocks: the executed line it came from
   bool otherAxes = false;   ///< its line also commands A, B, C, U, V or W (not in the path)
+  /// Spindle and Probe feeds are not the schedule's to change (see fixedFeed()).
+  FeedSource feedSource = FeedSource::Word;
+  /// Spindle-synchronised motion and probing: a feed schedule must leave the feed as it is.
+  bool fixedFeed() const { return feedSource != FeedSource::Word; }
 
   // How the move was programmed, so that a writer can emit it back in the same terms.
   bool inch = false;                ///< G20

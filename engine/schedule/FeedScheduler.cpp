@@ -194,6 +194,8 @@ const char* bindingName(Binding b) {
       return "air";
     case Binding::Plunge:
       return "plunge";
+    case Binding::Fixed:
+      return "fixed";
   }
   return "none";
 }
@@ -269,6 +271,12 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   for (std::size_t i = 0; i < st.size(); ++i) {
     const StepRecord& s = st[i];
     if (!isFeedStep(s)) continue;
+    if (path.moves[s.move].fixedFeed()) {
+      // Threading and probing feeds are the controller's (pitch x speed, probe feed).
+      out.wanted[i] = s.feed;
+      out.binding[i] = Binding::Fixed;
+      continue;
+    }
     const double mrr = load(s);
     if (mrr < kAirShare * out.targetMrr) {
       out.wanted[i] = std::clamp(o.airFeed > 0.0 ? o.airFeed : s.feed, fMin, fMax);

@@ -44,8 +44,9 @@ struct ScheduleOptions {
 /// (mm) and spindle speed N (rpm). Throws ParameterError for non-positive inputs.
 double mrrForForce(double force, double specificEnergy, double diameter, double spindleRpm);
 
-/// Why a step's feed is not the one that meets the target.
-enum class Binding { None, FeedMin, FeedMax, Acceleration, Air, Plunge };
+/// What keeps a step's feed from the one that meets the target. Fixed: spindle-synchronised
+/// or probing moves, whose feed the controller sets (Move::fixedFeed()).
+enum class Binding { None, FeedMin, FeedMax, Acceleration, Air, Plunge, Fixed };
 
 /// The result: per-step feeds and the plan for the writer.
 struct Schedule {

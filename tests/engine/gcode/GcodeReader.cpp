@@ -103,8 +103,9 @@ TEST_CASE("programs in the dialects users bring interpret as LinuxCNC's rs274 do
   ReaderOptions options;
   options.toolTable = data + "linuxcnc/tools.tbl";
   options.toolTableInch = true;  // rs274 without an INI file reads tool tables in inches
-  for (const char* name : {"fusion360_pocket.nc", "freecad_profile.ngc", "grbl_engrave.gcode",
-                           "inch_helix.ngc", "linuxcnc_features.ngc"}) {
+  for (const char* name :
+       {"fusion360_pocket.nc", "freecad_profile.ngc", "grbl_engrave.gcode", "inch_helix.ngc",
+        "linuxcnc_features.ngc", "linuxcnc_probe_tap.ngc", "lathe_diameter_thread.ngc"}) {
     INFO(name);
     const std::string stem = std::string(name).substr(0, std::string(name).find('.'));
     const auto expected = readGolden(golden + stem + ".csv");
@@ -120,6 +121,46 @@ TEST_CASE("programs in the dialects users bring interpret as LinuxCNC's rs274 do
         CHECK(got[i].turns == expected[i].turns);
       }
     }
+  }
+}
+
+TEST_CASE("probing, spindle-synchronised motion and lathe diameter mode", "[gcode]") {
+  SECTION("G38.x runs to the target and backs off 0.254 mm; #5061-#5063 hold the target") {
+    // rs274 (LinuxCNC's stand-alone interpreter) without a part: the probe reaches its
+    // target, #5070 = 0 (no contact), and it stops 0.254 mm (0.010 in) back towards the start.
+    const auto m = moves(
+        "G21 F50\nG0 X3 Y4 Z10\nG38.2 Z0\nG1 X#5061 Y[#5062 + #5070] Z#5063\n"
+        "G20\nG38.3 X[#5420 + 1] F2\nM2\n");
+    REQUIRE(m.size() == 6);
+    checkPoint(m[1].end, 3, 4, 0);
+    checkPoint(m[2].end, 3, 4, 0.254);
+    CHECK(m[1].feedSource == FeedSource::Probe);
+    CHECK(m[1].feed == Approx(50.0));
+    checkPoint(m[3].end, 3, 4, 0);  // the parameters: the target, no contact
+    checkPoint(m[4].end, 3 + 25.4, 4, 0);
+    checkPoint(m[5].end, 3 + 25.4 - 0.254, 4, 0);  // 0.010 in back
+  }
+  SECTION("G33 feeds at K x S; G33.1 taps in and back out") {
+    const auto m = moves("G21 S400 M3\nG0 X1 Y1 Z2\nG33 Z-10 K1.5\nG33.1 Z-20 K1\nM2\n");
+    REQUIRE(m.size() == 4);
+    CHECK(m[1].feed == Approx(600.0));  // 1.5 mm/rev x 400 rpm
+    CHECK(m[1].feedSource == FeedSource::Spindle);
+    checkPoint(m[2].end, 1, 1, -20);
+    checkPoint(m[3].end, 1, 1, -10);  // back where the tap started
+    CHECK(m[3].feed == Approx(400.0));
+  }
+  SECTION("G7 reads X words as diameters (arc centres stay radii); G8 as radii") {
+    const auto m = moves(
+        "G18 G21 G7 F100\nG0 X40 Z0\nG1 X20\nG91 G1 X-4\nG90 G2 X4 Z-4 I-3 K-2\n"
+        "G8 G1 X20\nG7 G92 X10\nG1 X20\nM2\n");
+    checkPoint(m[0].end, 20, 0, 0);
+    checkPoint(m[1].end, 10, 0, 0);
+    checkPoint(m[2].end, 8, 0, 0);  // an increment of 4 on the diameter
+    checkPoint(m[3].end, 2, 0, -4);
+    checkPoint(m[3].center, 5, 0, -2);
+    checkPoint(m[4].end, 20, 0, -4);  // G8 on the line itself: a radius
+    // G92 X10 under G7 at radius 20: program radius 5, offset 15; X20 -> radius 10 + 15.
+    checkPoint(m[5].end, 25, 0, -4);
   }
 }
 
@@ -341,7 +382,15 @@ TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]"
   CHECK_THAT(errorOf("G0 X1 X2\n"),
              Contains("1:7: expected one X word per line, found a second X"));
   CHECK_THAT(errorOf("G81 X1 Z-1 F10\n"), Contains("expected an R word"));
-  CHECK_THAT(errorOf("G38.2 Z-1 F10\n"), Contains("probing"));
+  CHECK_THAT(errorOf("G0 Z1\nG38.2 Z1 F10\n"),
+             Contains("2:1: expected a probe target away from the start point"));
+  CHECK_THAT(errorOf("G93 G38.2 Z-1 F10\n"),
+             Contains("expected units-per-minute feed (G94) for G38.2, found inverse time"));
+  CHECK_THAT(errorOf("S100 M3\nG33 Z-1\n"),
+             Contains("2:1: expected a K word (distance per spindle revolution) with G33"));
+  CHECK_THAT(errorOf("G33.1 Z-1 K1\n"), Contains("expected a spindle speed S > 0 for G33.1"));
+  CHECK_THAT(errorOf("G18 G70 Q100 X15 Z4 D1 P1\n"),
+             Contains("1:5: expected a milling motion, found G70 (lathe turning cycles"));
   ReaderOptions limited;
   limited.maxExecutedLines = 1000;
   CHECK_THROWS_WITH(run("o1 while [1]\no1 endwhile\n", limited),

@@ -139,3 +139,19 @@ TEST_CASE("programs that do not run line by line cannot be re-fed in place", "[g
   plan.pop_back();
   CHECK_THROWS_WITH(writeProgram(src, t, plan), Contains("feed plan has 1 entries for 2 moves"));
 }
+
+TEST_CASE("threading and probing feeds are the controller's and stay as they are", "[gcode]") {
+  const std::string src = "G21 S500 M3 F100\nG1 X10\nG33 Z-5 K1\nG38.2 Z-20\nM2\n";
+  const Toolpath t = read(src);
+  FeedPlan plan = unchanged(t);
+  plan[0] = {{1.0, 150.0}};  // the G1 line may change
+  CHECK(writeProgram(src, t, plan) ==
+        "G21 S500 M3 F100\nG1 X10 F150\nG33 Z-5 K1\n"
+        "G38.2 Z-20 F100\nM2\n");
+  for (const std::size_t fixed : {std::size_t{1}, std::size_t{2}}) {
+    plan = unchanged(t);
+    plan[fixed] = {{1.0, 80.0}};
+    CHECK_THROWS_WITH(writeProgram(src, t, plan),
+                      Contains("is not the F word's; engage cannot change it"));
+  }
+}
