@@ -31,8 +31,10 @@ double cut(Intervals& iv, double a, double b, double keep) {
                    [&](const Interval& x) { return x.z1 > a && x.z0 < b && x.f > keep; }))
     return 0.0;
   double removed = 0.0;
-  Intervals out;
-  out.reserve(iv.size() + 2);
+  // Scratch buffers reused from call to call (a removal calls this for every band piece of
+  // every ray it reaches): no allocation once they have grown.
+  static thread_local Intervals out, merged;
+  out.clear();
   for (const Interval& x : iv) {
     if (x.z1 <= a || x.z0 >= b || x.f <= keep) {
       out.push_back(x);
@@ -45,15 +47,14 @@ double cut(Intervals& iv, double a, double b, double keep) {
     if (hi < x.z1) out.push_back({hi, x.z1, x.f});
   }
   // Neighbours with one share become one interval.
-  Intervals merged;
-  merged.reserve(out.size());
+  merged.clear();
   for (const Interval& x : out) {
     if (!merged.empty() && merged.back().z1 >= x.z0 - 1e-12 && merged.back().f == x.f)
       merged.back().z1 = x.z1;
     else
       merged.push_back(x);
   }
-  iv.swap(merged);
+  iv.assign(merged.begin(), merged.end());
   return removed;
 }
 
@@ -95,15 +96,155 @@ bool widensUpwards(const AptCutter& c) {
   return c.parameters().taperAngleRad >= 0.0;
 }
 
-/// Lowest height above the tip where the cutter's radius reaches rho (rho <= max radius).
+/// Lowest height above the tip where the cutter's radius reaches rho, from the profile in
+/// closed form (its widening pieces, lines and the lower corner arc); the cutting height
+/// beyond the widest radius. For cutters that widen upwards.
 double lowestAt(const AptCutter& c, double rho) {
-  if (c.radiusAt(0.0) >= rho) return 0.0;
-  double lo = 0.0, hi = c.height();
-  for (int k = 0; k < 60 && hi - lo > 1e-9; ++k) {
-    const double mid = 0.5 * (lo + hi);
-    (c.radiusAt(mid) >= rho ? hi : lo) = mid;
+  for (const ProfileSegment& s : c.profile()) {
+    const double x0 = s.start.x(), x1 = s.end.x();
+    if (!(x1 > x0) || rho > x1) continue;  // pieces that do not widen, or end inside rho
+    if (rho <= x0) return s.start.y();
+    if (s.kind == ProfileSegment::Kind::Line)
+      return s.start.y() + (rho - x0) * (s.end.y() - s.start.y()) / (x1 - x0);
+    const double dx = rho - s.center.x();
+    return s.center.y() - std::sqrt(std::max(0.0, s.radius * s.radius - dx * dx));
   }
-  return hi;
+  return c.height();
+}
+
+/// Minimum of f over [lo, hi] by golden-section search down to `tol` in t, with both ends
+/// compared: exact for functions convex on the interval; +inf for an empty interval.
+template <class F>
+double minimumOn(const F& f, double lo, double hi, double tol) {
+  if (!(hi >= lo)) return std::numeric_limits<double>::infinity();
+  constexpr double g = 0.38196601125010515;  // 2 - golden ratio
+  double a = lo, b = hi;
+  double x1 = a + g * (b - a), x2 = b - g * (b - a);
+  double f1 = f(x1), f2 = f(x2);
+  while (b - a > tol) {
+    if (f1 <= f2) {
+      b = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = a + g * (b - a);
+      f1 = f(x1);
+    } else {
+      a = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = b - g * (b - a);
+      f2 = f(x2);
+    }
+  }
+  return std::min({f1, f2, f(lo), f(hi)});
+}
+
+/// One column seen from a step that changes height (a ramp, or a helix piece about a vertical
+/// axis): the XY distance rho(t) from the column's centre q to the tip's track and the tip's
+/// height z(t), t in [0, 1].
+struct RampColumn {
+  const StepPath& p;
+  Eigen::Vector2d q;
+
+  double rho(double t) const { return (q - p.at(t).head<2>()).norm(); }
+  double z(double t) const { return p.start.z() + t * (p.end.z() - p.start.z()); }
+
+  /// The parameters where rho(t) <= a, an interval within [0, 1] (lo > hi when empty).
+  /// Arcs: the step turns less than a half turn about its centre (the caller checks).
+  std::pair<double, double> within(double a) const {
+    constexpr std::pair<double, double> none{1.0, 0.0};
+    if (a < 0.0) return none;
+    if (p.kind == StepPath::Kind::Line) {
+      const Eigen::Vector2d A = p.start.head<2>(), v = p.end.head<2>() - A, w = q - A;
+      const double vv = v.squaredNorm(), b = v.dot(w), c = w.squaredNorm() - a * a;
+      if (vv < 1e-24) return c <= 0.0 ? std::make_pair(0.0, 1.0) : none;  // no XY motion
+      const double disc = b * b - vv * c;
+      if (disc < 0.0) return none;
+      const double r = std::sqrt(disc);
+      return {std::max(0.0, (b - r) / vv), std::min(1.0, (b + r) / vv)};
+    }
+    // rho^2 = dq^2 + r^2 - 2 dq r cos(theta - phi) <= a^2 about the centre c.
+    const Eigen::Vector2d c = p.center.head<2>(), s = p.start.head<2>() - c, v = q - c;
+    const double r = s.norm(), dq = v.norm();
+    if (dq * r < 1e-12) return std::abs(dq - r) <= a ? std::make_pair(0.0, 1.0) : none;
+    const double k = (dq * dq + r * r - a * a) / (2.0 * dq * r);
+    if (k > 1.0) return none;
+    if (k <= -1.0) return {0.0, 1.0};
+    const double half = std::acos(k);
+    // Angle of q from the start, in the direction of travel, in (-pi, pi].
+    double d0 = std::atan2(s.x() * v.y() - s.y() * v.x(), s.dot(v));
+    if (p.sweepRad < 0) d0 = -d0;
+    const double sweep = std::abs(p.sweepRad);
+    // theta(t) - phi = sweep t - d0 must lie in [-half, half] (+ 2 pi n, n = -1, 0, 1).
+    double lo = 1.0, hi = 0.0;
+    for (int n = -1; n <= 1; ++n) {
+      const double t0 = std::max(0.0, (d0 - half + 2.0 * kPi * n) / sweep);
+      const double t1 = std::min(1.0, (d0 + half + 2.0 * kPi * n) / sweep);
+      if (t1 >= t0) {
+        lo = std::min(lo, t0);
+        hi = std::max(hi, t1);
+      }
+    }
+    return {lo, hi};
+  }
+};
+
+/// The swept solid of one step that may change height (a line, or a helix piece of less
+/// than a quarter turn about a vertical axis), of a cutter that widens upwards, along the ray
+/// of column q (spacing h) below `rayTop`: appended to `solid` as intervals with the share of
+/// the column covered. Each height is a one-dimensional minimum along the step (convex along
+/// a line): the lowest the cutter comes within h/2 of q (below it, no cover), within -h/2
+/// (above it, full cover), and between them the cover of band pieces from the XY distance
+/// of q to the slice of the swept solid at their middle (the discs of radius W(z - z(t)) along
+/// the track), as for steps that keep their height.
+void rampSolid(const StepPath& path, const AptCutter& cutter, const Eigen::Vector2d& q, double h,
+               double rayTop, std::vector<Interval>& solid) {
+  const RampColumn col{path, q};
+  const double R = cutter.maxRadius(), H = cutter.height();
+  const double zLow = std::min(path.start.z(), path.end.z());
+  // Near an interior minimum a miss of dt in t costs f''dt^2/2: 1e-2 of a step is below
+  // 1e-5 mm for steps of a few ray spacings; minima at the ends are exact.
+  constexpr double tTol = 1e-2;
+  // Cheap dismissal first (most rays of a finishing pass): nothing of the cutter is lower
+  // here than the lowest tip plus the profile's height at the track's distance.
+  const double rhoMin = pathDistance(path, q);
+  if (rhoMin - 0.5 * h > R || rayTop <= zLow + lowestAt(cutter, std::max(0.0, rhoMin - 0.5 * h)))
+    return;
+  const auto reach = col.within(R + 0.5 * h);
+  if (reach.first > reach.second) return;
+  auto lowest = [&](double delta, std::pair<double, double> range) {
+    return minimumOn(
+        [&](double t) { return col.z(t) + lowestAt(cutter, std::max(0.0, col.rho(t) + delta)); },
+        range.first, range.second, tTol);
+  };
+  const double zNone = lowest(-0.5 * h, reach);
+  if (zNone >= rayTop) return;
+  const double top = std::max(path.start.z(), path.end.z()) + H;
+  const double zFull = std::min(top, lowest(0.5 * h, col.within(R - 0.5 * h)));
+  const double bandTop = std::min(zFull, rayTop);
+  const double dz = path.end.z() - path.start.z();
+  // Eight pieces per ray spacing of band height, at most eight (as for flat steps).
+  const int pieces = std::clamp(static_cast<int>(std::ceil(8.0 * (bandTop - zNone) / h)), 1, 8);
+  for (int k = 0; k < pieces && bandTop > zNone; ++k) {
+    const double a = zNone + (bandTop - zNone) * k / pieces;
+    const double b = zNone + (bandTop - zNone) * (k + 1) / pieces;
+    const double zm = 0.5 * (a + b);
+    // Tip heights z(t) in [zm - H, zm]: the instances whose side spans zm.
+    double t0 = reach.first, t1 = reach.second;
+    if (std::abs(dz) > 1e-12) {
+      const double u0 = (zm - H - path.start.z()) / dz, u1 = (zm - path.start.z()) / dz;
+      t0 = std::max(t0, std::min(u0, u1));
+      t1 = std::min(t1, std::max(u0, u1));
+    } else if (zm < path.start.z() || zm > path.start.z() + H) {
+      continue;
+    }
+    const double d2 = minimumOn(
+        [&](double t) { return col.rho(t) - cutter.radiusAt(zm - col.z(t)); }, t0, t1, tTol);
+    const double cover = std::clamp(0.5 - d2 / h, 0.0, 1.0);
+    if (cover > 0.0) solid.push_back({a, b, cover});
+  }
+  if (bandTop < zFull) solid.push_back({bandTop, zFull, 1.0});  // (no material there)
+  if (top > zFull) solid.push_back({zFull, top, 1.0});
 }
 
 }  // namespace
@@ -254,6 +395,23 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
   const bool flat = (vertical || (std::abs(path.end.z() - path.start.z()) < 1e-12 &&
                                   path.kind != StepPath::Kind::Polyline)) &&
                     widensUpwards(cutter);
+  // Steps that change height, of such cutters: lines, helix pieces of less than a quarter
+  // turn, and the line pieces of polylines (arcs in the XZ and YZ planes, splines), each
+  // seen from every ray by rampSolid. Others (inward-leaning sides, longer turns): the march.
+  std::vector<StepPath> pieces;
+  if (!flat && widensUpwards(cutter)) {
+    if (path.kind == StepPath::Kind::Line ||
+        (path.kind == StepPath::Kind::ArcXY && std::abs(path.sweepRad) < 0.5 * kPi)) {
+      pieces.push_back(path);
+    } else if (path.kind == StepPath::Kind::Polyline) {
+      for (std::size_t k = 1; k < path.points.size(); ++k) {
+        StepPath line;
+        line.start = path.points[k - 1];
+        line.end = path.points[k];
+        pieces.push_back(line);
+      }
+    }
+  }
   const int i0 = std::max(0, static_cast<int>(std::floor((sb.min.x() - x0_) / h_ - 0.5)));
   const int i1 = std::min(nx_ - 1, static_cast<int>(std::ceil((sb.max.x() - x0_) / h_ - 0.5)));
   const int j0 = std::max(0, static_cast<int>(std::floor((sb.min.y() - y0_) / h_ - 0.5)));
@@ -271,13 +429,14 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
     double z0, z1;
   };
   std::vector<Cut> cuts;
+  std::vector<Interval> solid;
   for (int j = j0; j <= j1; ++j)
     for (int i = i0; i <= i1; ++i) {
       Intervals& ray = rays_[index(i, j)];
       if (ray.empty()) continue;
       const Eigen::Vector2d q(x0_ + (i + 0.5) * h_, y0_ + (j + 0.5) * h_);
       // The swept solid along this ray: intervals with the share of the column it covers.
-      std::vector<Interval> solid;
+      solid.clear();
       if (flat) {
         const double rho = pathDistance(path, q);
         if (rho - 0.5 * h_ > cutter.maxRadius()) continue;
@@ -306,6 +465,11 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
         }
         if (bandTop < zFull) solid.push_back({bandTop, zFull, 1.0});  // (no material there)
         if (top > zFull) solid.push_back({zFull, top, 1.0});
+      } else if (!pieces.empty()) {
+        ++out.voxelsVisited;
+        for (const StepPath& piece : pieces)
+          rampSolid(piece, cutter, q, h_, ray.back().z1, solid);
+        if (solid.empty()) continue;
       } else {
         ++out.voxelsVisited;
         const double lo = std::max(sb.min.z(), ray.front().z0) - kZTolerance;
@@ -355,8 +519,19 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
         removed += lost;
         // The capture: where this piece lost material, and the column's share it lost there
         // on average (so that the captured volume is the removed volume).
-        if (capture_ && lost > 0.0 && zHi > zLo)
-          log_.push_back({i, j, zLo, zHi, lost / (zHi - zLo) * weight_[index(i, j)], step});
+        if (capture_ && lost > 0.0 && zHi > zLo) {
+          const double share = lost / (zHi - zLo) * weight_[index(i, j)];
+          Lost* last = log_.empty() ? nullptr : &log_.back();
+          if (last && last->i == i && last->j == j && last->step == step &&
+              std::abs(last->z1 - zLo) < 1e-9) {
+            // The next band piece right above: one entry, the same volume.
+            last->share =
+                (last->share * (last->z1 - last->z0) + share * (zHi - zLo)) / (zHi - last->z0);
+            last->z1 = zHi;
+          } else {
+            log_.push_back({i, j, zLo, zHi, share, step});
+          }
+        }
       }
       if (removed <= 0.0) continue;
       const double w = weight_[index(i, j)];

@@ -11,14 +11,16 @@
 /// by 6-17 % per step on a slot (shared/BUILD-NOTES.md). Columns at the stock's edges weigh
 /// by the share of their area inside it.
 ///
-/// A step's swept solid meets a ray in an interval: for steps that keep their height (lines
-/// and arcs in XY) and vertical ones (plunges, retracts) of cutters whose radius never
-/// shrinks upwards, in closed form (from the
-/// distance of the ray to the step's path and the profile's radius over height, with the
-/// outline's coverage over the band of heights where it crosses the column); for every other
-/// step (ramps, helices, arcs out of XY), all or nothing, by marching the sweep's signed distance
-/// up the ray (steps of the distance itself, which never cross the surface) and bisecting its sign
-/// changes.
+/// A step's swept solid meets a ray in an interval. For cutters whose radius never shrinks
+/// upwards: steps that keep their height (lines and arcs in XY) and vertical ones (plunges,
+/// retracts) in closed form, from the distance of the ray to the step's path and the
+/// profile's radius over height; steps that change height (ramps, helix pieces, and the line
+/// pieces of arcs out of XY and splines) from one-dimensional minima along the step (convex
+/// along a line): the lowest height the cutter reaches near the ray, and the cover of the band
+/// where its outline crosses the column from the ray's distance to the swept solid's slice
+/// there. Every other step (inward-leaning sides), all or nothing, by marching the sweep's
+/// signed distance up the ray (steps of the distance itself, which never cross the surface)
+/// and bisecting its sign changes.
 
 #include "cutters/AptCutter.h"
 #include "cutters/Sweep.h"

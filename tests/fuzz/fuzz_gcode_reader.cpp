@@ -3,8 +3,8 @@
 //
 //   cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DENGAGE_FUZZ=ON -DENGAGE_TESTS=OFF
 //   cmake --build build-fuzz --target fuzz_gcode_reader
-//   build-fuzz/tests/fuzz/fuzz_gcode_reader -max_total_time=600 -max_len=4096 \
-//       tests/fuzz/corpus data/gcode/dialects
+//   mkdir -p build-fuzz/corpus && build-fuzz/tests/fuzz/fuzz_gcode_reader -max_total_time=600 \
+//       -max_len=4096 build-fuzz/corpus data/gcode/dialects
 
 #include "engine/gcode/GcodeReader.h"
 

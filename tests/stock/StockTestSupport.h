@@ -22,6 +22,34 @@ inline StepPath line(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return p;
 }
 
+/// Volumes of the steps of a helical bore: the tip on a helix of radius `helixRadius` about
+/// the vertical line through `centre` (from `centre` + helixRadius x, at its height), `pitch`
+/// lower per counter-clockwise turn, `turns` turns in arc pieces of `L` (mm of XY arc).
+inline std::vector<double> helix(Stock& stock, const AptCutter& c, const Eigen::Vector3d& centre,
+                                 double helixRadius, double pitch, double turns, double L) {
+  const double h = stock.resolution();
+  const double step = L / helixRadius;  // radians
+  const int n = static_cast<int>(std::round(turns * 2.0 * kPi / step));
+  auto at = [&](int k) {
+    const double a = k * step;
+    return Eigen::Vector3d(centre.x() + helixRadius * std::cos(a),
+                           centre.y() + helixRadius * std::sin(a),
+                           centre.z() - pitch * a / (2.0 * kPi));
+  };
+  stock.remove(Sweep(c, line(at(0), at(0)), h));
+  std::vector<double> v;
+  for (int k = 0; k < n; ++k) {
+    StepPath p;
+    p.kind = StepPath::Kind::ArcXY;
+    p.start = at(k);
+    p.end = at(k + 1);
+    p.center = centre;
+    p.sweepRad = step;
+    v.push_back(stock.remove(Sweep(c, p, h)).volume);
+  }
+  return v;
+}
+
 /// Volumes of the steps of a straight pass from `a` over `length` along `dir` in steps of L,
 /// after placing the tool at `a` (its own removal not counted).
 inline std::vector<double> pass(Stock& stock, const AptCutter& c, const Eigen::Vector3d& a,
