@@ -24,6 +24,32 @@ bool withinSweep(double a, double a0, double sweep) {
   return d <= std::abs(sweep);
 }
 
+/// The point of the parallelogram {o + s a + w b : s, w in [0, 1]} closest to p.
+Eigen::Vector3d closestOnParallelogram(const Eigen::Vector3d& p, const Eigen::Vector3d& o,
+                                       const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d v = p - o;
+  const double aa = a.dot(a), ab = a.dot(b), bb = b.dot(b);
+  const double det = aa * bb - ab * ab;
+  if (det > 1e-12 * aa * bb) {
+    const double s = (bb * a.dot(v) - ab * b.dot(v)) / det;
+    const double w = (aa * b.dot(v) - ab * a.dot(v)) / det;
+    if (s >= 0.0 && s <= 1.0 && w >= 0.0 && w <= 1.0) return o + s * a + w * b;
+  }
+  // Outside (or degenerate): the nearest of the four edges.
+  const Eigen::Vector3d corners[4] = {o, o + a, o + a + b, o + b};
+  Eigen::Vector3d best = o;
+  double bestDistance = 1e300;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector3d q = closestOnSegment(p, corners[k], corners[(k + 1) % 4]);
+    const double dq = (q - p).squaredNorm();
+    if (dq < bestDistance) {
+      bestDistance = dq;
+      best = q;
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 Eigen::Vector3d StepPath::at(double u) const {
@@ -109,6 +135,12 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
   // APT cutters are convex unless their sides lean inward (beta < 0).
   convexLine_ =
       !flat_ && path_.kind == StepPath::Kind::Line && cutter_.parameters().taperAngleRad >= 0.0;
+  // A ball end mill is a capsule about its axis (ball centre up to h - r above it) but for
+  // its flat top; along a straight step it sweeps a parallelogram thickened by r.
+  const AptParameters& ap = cutter_.parameters();
+  capsuleLine_ = convexLine_ && !vertical_ && ap.cornerCenterRadial == 0.0 &&
+                 ap.cornerRadius == ap.radius && ap.taperAngleRad == 0.0 &&
+                 ap.bottomAngleRad == 0.0 && ap.height >= 2.0 * ap.radius;
   Eigen::Vector3d lo = extremes.front();
   Eigen::Vector3d hi = extremes.front();
   for (const Eigen::Vector3d& e : extremes) {
@@ -140,6 +172,18 @@ double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient
                                       flatDistance(p - Eigen::Vector3d(0, 0, e))) /
                   (2.0 * e);
     return d;
+  }
+  if (capsuleLine_ && p.z() <= zLow_ + cutter_.height() - cutter_.radius()) {
+    // Below every instance's top less r: the distance to the thickened parallelogram is the
+    // swept ball end mill's, exactly (the flat top is at least r away).
+    const double r = cutter_.radius();
+    const Eigen::Vector3d o = path_.start + Eigen::Vector3d(0.0, 0.0, r);
+    const Eigen::Vector3d q = closestOnParallelogram(
+        p, o, path_.end - path_.start, Eigen::Vector3d(0.0, 0.0, cutter_.height() - 2.0 * r));
+    const Eigen::Vector3d off = p - q;
+    const double dist = off.norm();
+    if (gradient) *gradient = dist > 0.0 ? Eigen::Vector3d(off / dist) : Eigen::Vector3d::UnitZ();
+    return dist - r;
   }
   // Cheap answers first; the search is needed only near the swept surface. A point deeper
   // than `band_` inside the tool at the step's end is inside the swept solid (the union's

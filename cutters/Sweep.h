@@ -69,6 +69,7 @@ class Sweep {
   StepPath path_;
   bool flat_ = false;            ///< the step keeps its height: closed form
   bool convexLine_ = false;      ///< a straight step of a convex cutter: golden-section search
+  bool capsuleLine_ = false;     ///< a straight step of a ball end mill: closed form
   bool vertical_ = false;        ///< a plunge or retract (no horizontal motion)
   double band_ = 0.0;            ///< distances beyond this only need their sign, mm
   double resolution_ = 0.0;      ///< mm
