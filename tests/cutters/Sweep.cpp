@@ -59,3 +59,39 @@ TEST_CASE("a plunge and a ramp take the closest tool position", "[cutters]") {
   // Golden-section search to 0.8 % of the step: the distance is found within 1e-4 mm.
   CHECK(ramp.signedDistance({4, 0, -3}) == Approx(0.5 / std::sqrt(1.25)).margin(1e-4));
 }
+
+TEST_CASE("a ball end mill's ramp is a thickened parallelogram", "[cutters]") {
+  // Ball D 6 (r 3), flute 18, from (0,0,0) down to (10,0,-1): the ball centre runs from
+  // (0,0,3) to (10,0,2). Hand values: beside the middle at the centre's height, 4 away: 1.
+  const AptCutter c = AptCutter::ball(6.0, 18.0);
+  StepPath p;
+  p.start = {0, 0, 0};
+  p.end = {10, 0, -1};
+  const Sweep s(c, p, 0.1);
+  CHECK(s.signedDistance({5, 4, 2.5}) == Approx(1.0).margin(1e-12));
+  // Below and behind the start: the distance to the centre's line (it projects just inside
+  // the segment), |v x a| / |a| - r with v = (-0.3, 0, -4), a = (10, 0, -1): 40.3/sqrt(101) - 3.
+  CHECK(s.signedDistance({-0.3, 0, -1}) == Approx(40.3 / std::sqrt(101.0) - 3.0).margin(1e-12));
+  // Outside: the same as the nearest of many tool positions (independent brute force).
+  for (const Eigen::Vector3d& q : {Eigen::Vector3d(3, 3.5, 1), Eigen::Vector3d(13, 1, 0),
+                                   Eigen::Vector3d(7, -2, -2.5), Eigen::Vector3d(-2, 3, 4)}) {
+    double brute = 1e300;
+    for (int k = 0; k <= 20000; ++k)
+      brute = std::min(brute, c.signedDistance(q - p.at(k / 20000.0)));
+    INFO(q.transpose());
+    REQUIRE(brute > 0.0);
+    CHECK(s.signedDistance(q) == Approx(brute).margin(1e-6));  // sampling: < 1e-7 mm
+  }
+  // Inside: at least as deep as under the deepest single position (the union's surface is
+  // no nearer than any one tool's).
+  const Eigen::Vector3d inside(5, 0.5, 1.5);
+  double deepest = 1e300;
+  for (int k = 0; k <= 2000; ++k)
+    deepest = std::min(deepest, c.signedDistance(inside - p.at(k / 2000.0)));
+  CHECK(s.signedDistance(inside) <= deepest + 1e-9);
+  // The gradient points away from the solid, unit length.
+  Eigen::Vector3d g;
+  s.signedDistance({5, 4, 2.5}, &g);
+  CHECK(g.y() == Approx(1.0).margin(1e-9));
+  CHECK(g.norm() == Approx(1.0));
+}
