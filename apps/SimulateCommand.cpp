@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -420,13 +421,9 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
   ps.accelerationLabel = unitLabel(Dimension::Acceleration, sys);
   ps.schedule = o.schedule;
   ps.accelerationLimit = toDisplay(sched.acceleration, Dimension::Acceleration, sys);
-  std::string plotted;
-  try {
-    for (const std::string& f : writePlots(ps))
-      if (f.size() > 4 && f.compare(f.size() - 4, 4, ".png") == 0) plotted += "," + f;
-  } catch (const Error& e) {
-    std::fprintf(stderr, "engage: warning: plots not drawn: %s\n", e.what());
-  }
+  // gnuplot draws in its own process while the stock files are written (seconds each on a
+  // fine grid); its outcome is collected below.
+  auto plots = std::async(std::launch::async, [&ps] { return writePlots(ps); });
   std::size_t open = 0;
   if (voxelStock) {
     voxelStock->writeRemovedVdb((dir / "removed.vdb").string());
@@ -439,6 +436,13 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
     const VoxelStock shown = VoxelStock::fromDexels(dexels);
     shown.writeStockVdb((dir / "stock.vdb").string());
     open = shown.writeStl((dir / "stock.stl").string());
+  }
+  std::string plotted;
+  try {
+    for (const std::string& f : plots.get())
+      if (f.size() > 4 && f.compare(f.size() - 4, 4, ".png") == 0) plotted += "," + f;
+  } catch (const Error& e) {
+    std::fprintf(stderr, "engage: warning: plots not drawn: %s\n", e.what());
   }
 
   std::string report;
