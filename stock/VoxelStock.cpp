@@ -8,10 +8,14 @@
 
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/ChangeBackground.h>
+#include <openvdb/tools/FastSweeping.h>
 #include <openvdb/tools/Interpolation.h>
-#include <openvdb/tools/LevelSetRebuild.h>
 #include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/Prune.h>
+#include <openvdb/tools/SignedFloodFill.h>
 #include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
@@ -510,12 +514,39 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
 
 void VoxelStock::writeStockVdb(const std::string& path) const {
   // Beside the fractions, the surface as a narrow-band level set (negative inside, 3 voxels
-  // each side): the 0.5 iso-surface of the fractions, rebuilt (values negated so that the
-  // material lies below the iso-value, as a level set's inside does).
-  FloatGrid::Ptr negated = impl_->grid->deepCopy();
-  openvdb::tools::foreach (negated->beginValueOn(),
-                           [](const FloatGrid::ValueOnIter& it) { it.setValue(-*it); });
-  FloatGrid::Ptr surface = openvdb::tools::levelSetRebuild(*negated, -0.5f, 3.0f);
+  // each side) of their 0.5 iso-surface: around the voxels its mesh passes through (dilated
+  // by 3), a first guess (1/2 - fraction) h, its sign flood-filled inside, made distances by
+  // fast sweeping (OpenVDB's sdfToSdf). Meshing and re-voxelising (levelSetRebuild) took 5
+  // of the 9 s of a 17k-move run.
+  const FloatGrid& grid = *impl_->grid;
+  const double h = impl_->h;
+  const float width = static_cast<float>(3.0 * h);
+  std::vector<openvdb::Vec3s> points;
+  std::vector<openvdb::Vec3I> triangles;
+  std::vector<openvdb::Vec4I> quads;
+  openvdb::tools::volumeToMesh(grid, points, triangles, quads, 0.5, 0.0);
+  FloatGrid::Ptr band = FloatGrid::create(width);
+  band->setTransform(grid.transform().copy());
+  {
+    auto b = band->getAccessor();
+    for (const auto& p : points)
+      b.setValueOn(grid.transform().worldToIndexCellCentered(p));
+  }
+  openvdb::tools::dilateActiveValues(band->tree(), 3, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                     openvdb::tools::IGNORE_TILES);
+  {
+    auto f = grid.getConstAccessor();
+    for (auto it = band->beginValueOn(); it; ++it)
+      it.setValue(static_cast<float>((0.5 - static_cast<double>(f.getValue(it.getCoord()))) * h));
+  }
+  openvdb::tools::signedFloodFill(band->tree());
+  FloatGrid::Ptr surface = openvdb::tools::sdfToSdf(*band, 0.0f);
+  // The band's corners reach beyond 3 voxels: those become background, as in a level set.
+  for (auto it = surface->beginValueOn(); it; ++it)
+    if (std::abs(*it) >= width) it.setValueOff();
+  openvdb::tools::changeLevelSetBackground(surface->tree(), width);
+  openvdb::tools::signedFloodFill(surface->tree());
+  openvdb::tools::pruneLevelSet(surface->tree());
   surface->setName("surface");
   surface->setGridClass(openvdb::GRID_LEVEL_SET);
   const std::string tmp = path + ".part";
