@@ -50,6 +50,14 @@ inline std::vector<double> helix(Stock& stock, const AptCutter& c, const Eigen::
   return v;
 }
 
+/// The volume every steady step of helix() removes for a cutter of radius r with vertical
+/// sides (flat, ball, bull) when helixRadius < r: the bore has no island, and by helical
+/// symmetry each step takes the bore's area x pitch x its share of a turn,
+/// (helixRadius + r)^2 pitch (L / helixRadius) / 2.
+inline double helixSteadyStep(double helixRadius, double r, double pitch, double L) {
+  return (helixRadius + r) * (helixRadius + r) * pitch * (L / helixRadius) / 2.0;
+}
+
 /// Volumes of the steps of a straight pass from `a` over `length` along `dir` in steps of L,
 /// after placing the tool at `a` (its own removal not counted).
 inline std::vector<double> pass(Stock& stock, const AptCutter& c, const Eigen::Vector3d& a,
