@@ -272,6 +272,22 @@ AptCutter::AptCutter(const AptParameters& p, int flutes, CutterShape shape)
     if (s.kind == Seg::Kind::Arc && s.start.y() <= s.center.y() && s.end.y() >= s.center.y())
       maxRadius_ = std::max(maxRadius_, s.center.x() + s.radius);
   }
+  // Outward normal at the start or end of a piece: right of the direction of travel (the
+  // profile runs counter-clockwise round the solid), or radial for an arc.
+  auto normalAt = [](const Seg& s, bool atEnd) {
+    if (s.kind == Seg::Kind::Arc)
+      return Eigen::Vector2d(((atEnd ? s.end : s.start) - s.center).normalized());
+    const Eigen::Vector2d t = (s.end - s.start).normalized();
+    return Eigen::Vector2d(t.y(), -t.x());
+  };
+  for (std::size_t i = 0; i + 1 < profile_.size(); ++i) {
+    const Eigen::Vector2d before = normalAt(profile_[i], true);
+    const Eigen::Vector2d after = normalAt(profile_[i + 1], false);
+    // Convex (turning left) and sharp.
+    if (before.x() * after.y() - before.y() * after.x() > std::sin(kPi / 180.0) &&
+        profile_[i].end.x() > tol::kLengthMm)
+      corners_.push_back(ProfileCorner{profile_[i].end, before, after});
+  }
 }
 
 double AptCutter::radiusAt(double z) const {

@@ -58,6 +58,14 @@ struct ProfileSegment {
   double radius = 0.0;               ///< arcs only, mm
 };
 
+/// A sharp convex corner of the profile (a flat bottom meeting a side, a side meeting the top
+/// cap): where it is, and the outward unit normals (rho, z) of the faces before and after it.
+struct ProfileCorner {
+  Eigen::Vector2d at{0.0, 0.0};
+  Eigen::Vector2d normalBefore{0.0, 0.0};
+  Eigen::Vector2d normalAfter{0.0, 0.0};
+};
+
 /// Axis-aligned box, mm.
 struct Box3 {
   Eigen::Vector3d min{0.0, 0.0, 0.0};
@@ -116,6 +124,9 @@ class AptCutter {
 
   /// The profile from the tip up to and including the top cap, degenerate pieces omitted.
   const std::vector<ProfileSegment>& profile() const { return profile_; }
+  /// The profile's sharp convex corners (where the tangent turns by more than 1 deg), off
+  /// the axis.
+  const std::vector<ProfileCorner>& corners() const { return corners_; }
 
  private:
   AptCutter(const AptParameters& p, int flutes, CutterShape shape);
@@ -124,6 +135,7 @@ class AptCutter {
   int flutes_ = 2;
   CutterShape shape_ = CutterShape::General;
   std::vector<ProfileSegment> profile_;
+  std::vector<ProfileCorner> corners_;
   double maxRadius_ = 0.0;
   bool roundedBox_ = false;  ///< beta = delta = 0 and h >= 2 r_tc: closed-form distance
 };

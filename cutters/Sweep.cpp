@@ -162,16 +162,19 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
 double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const {
   const double e = resolution_ / 8.0;
   if (flat_) {
-    const double d = flatDistance(p);
-    if (gradient)
-      *gradient = Eigen::Vector3d(flatDistance(p + Eigen::Vector3d(e, 0, 0)) -
-                                      flatDistance(p - Eigen::Vector3d(e, 0, 0)),
-                                  flatDistance(p + Eigen::Vector3d(0, e, 0)) -
-                                      flatDistance(p - Eigen::Vector3d(0, e, 0)),
-                                  flatDistance(p + Eigen::Vector3d(0, 0, e)) -
-                                      flatDistance(p - Eigen::Vector3d(0, 0, e))) /
-                  (2.0 * e);
-    return d;
+    // d = P(rho, z) with P the profile's distance: the gradient is P's (central differences
+    // in the profile plane) along rho's gradient and the axis.
+    Eigen::Vector2d gradRho;
+    const double rho = flatRho(p, gradient ? &gradRho : nullptr);
+    const double z = p.z() - path_.start.z();
+    if (gradient) {
+      const double dRho =
+          cutter_.profileSignedDistance(rho + e, z) - cutter_.profileSignedDistance(rho - e, z);
+      const double dZ =
+          cutter_.profileSignedDistance(rho, z + e) - cutter_.profileSignedDistance(rho, z - e);
+      *gradient = Eigen::Vector3d(dRho * gradRho.x(), dRho * gradRho.y(), dZ) / (2.0 * e);
+    }
+    return cutter_.profileSignedDistance(rho, z);
   }
   if (capsuleLine_ && p.z() <= zLow_ + cutter_.height() - cutter_.radius()) {
     // Below every instance's top less r: the distance to the thickened parallelogram is the
@@ -223,23 +226,75 @@ double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient
   return d;
 }
 
-double Sweep::flatDistance(const Eigen::Vector3d& p) const {
+double Sweep::flatRho(const Eigen::Vector3d& p, Eigen::Vector2d* gradient) const {
   const Eigen::Vector2d q(p.x(), p.y());
+  Eigen::Vector2d from = q;  // the path point nearest in XY (rho's gradient points away)
   double rho = 0.0;
   if (path_.kind == StepPath::Kind::Line) {
-    rho = distanceToSegment(q, path_.start.head<2>(), path_.end.head<2>());
+    from = closestOnSegment(q, Eigen::Vector2d(path_.start.head<2>()),
+                            Eigen::Vector2d(path_.end.head<2>()));
+    rho = (q - from).norm();
   } else {
     const Eigen::Vector2d c = path_.center.head<2>();
     const double r = (path_.start.head<2>() - c).norm();
     const Eigen::Vector2d v = q - c;
     const double a0 = std::atan2(path_.start.y() - c.y(), path_.start.x() - c.x());
-    if (v.norm() > tol::kLengthMm && withinSweep(std::atan2(v.y(), v.x()), a0, path_.sweepRad))
+    if (v.norm() <= tol::kLengthMm) {
+      rho = r;  // the centre: every arc point is r away
+      from = q;
+    } else if (withinSweep(std::atan2(v.y(), v.x()), a0, path_.sweepRad)) {
+      from = c + r * v.normalized();
       rho = std::abs(v.norm() - r);
-    else
-      rho = std::min((q - path_.start.head<2>()).norm(), (q - path_.end.head<2>()).norm());
-    if (v.norm() <= tol::kLengthMm) rho = r;  // the centre: every arc point is r away
+    } else {
+      const Eigen::Vector2d s0 = path_.start.head<2>(), s1 = path_.end.head<2>();
+      from = (q - s0).norm() <= (q - s1).norm() ? s0 : s1;
+      rho = (q - from).norm();
+    }
   }
-  return cutter_.profileSignedDistance(rho, p.z() - path_.start.z());
+  if (gradient) *gradient = rho > 0.0 ? Eigen::Vector2d((q - from) / rho) : Eigen::Vector2d::Zero();
+  return rho;
+}
+
+double Sweep::flatDistance(const Eigen::Vector3d& p) const {
+  return cutter_.profileSignedDistance(flatRho(p, nullptr), p.z() - path_.start.z());
+}
+
+double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3d normals[2],
+                         double distances[2], int& count) const {
+  if (flat_ || vertical_) {
+    // A height-keeping step sweeps the profile along its path; a plunge or retract sweeps it
+    // up its axis, and only the lowest instance's lower corners stay on the surface.
+    Eigen::Vector2d grad = Eigen::Vector2d::Zero();
+    double rho = 0.0;
+    if (flat_) {
+      rho = flatRho(p, &grad);
+    } else {
+      const Eigen::Vector2d v = p.head<2>() - path_.start.head<2>();
+      rho = v.norm();
+      if (rho > 0.0) grad = v / rho;
+    }
+    const Eigen::Vector2d at(rho, p.z() - (flat_ ? path_.start.z() : zLow_));
+    const ProfileCorner* nearest = nullptr;
+    for (const ProfileCorner& c : cutter_.corners())
+      if ((flat_ || c.at.y() < 0.5 * cutter_.height()) && (at - c.at).norm() < radius &&
+          (!nearest || (at - c.at).norm() < (at - nearest->at).norm()))
+        nearest = &c;
+    if (nearest && grad.squaredNorm() > 0.0) {
+      // The swept solid is the profile swept along the path: near the corner, inside both
+      // faces' lines, lifted to 3D along rho's gradient.
+      const Eigen::Vector2d* m[2] = {&nearest->normalBefore, &nearest->normalAfter};
+      for (int i = 0; i < 2; ++i) {
+        normals[i] = Eigen::Vector3d(m[i]->x() * grad.x(), m[i]->x() * grad.y(), m[i]->y());
+        distances[i] = m[i]->dot(at - nearest->at);
+      }
+      count = 2;
+      return flat_ ? cutter_.profileSignedDistance(rho, at.y()) : signedDistance(p);
+    }
+  }
+  count = 1;
+  const double d = signedDistance(p, &normals[0]);
+  distances[0] = d;
+  return d;
 }
 
 double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter) const {

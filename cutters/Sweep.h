@@ -54,6 +54,14 @@ class Sweep {
   /// Far from the surface (beyond `resolution`) the value may be a bound of the right sign
   /// and the gradient is not set.
   double signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient = nullptr) const;
+  /// The swept solid near p (within `radius`, mm) as the points inside `count` half-spaces
+  /// {x : normals[i] . (x - p) + distances[i] <= 0} (unit normals pointing out of the solid,
+  /// distances in mm): two where a sharp corner of the profile (a flat bottom's edge) is
+  /// within `radius` of p on a step that keeps its height or on a plunge or retract, the
+  /// tangent plane of the signed distance otherwise. Returns the signed distance, mm. (`normals[0]`
+  /// is left unset, like the gradient of signedDistance, beyond `resolution` from the surface.)
+  double localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3d normals[2],
+                    double distances[2], int& count) const;
   /// World bounding box of the swept solid, mm.
   Box3 bounds() const { return bounds_; }
   const StepPath& path() const { return path_; }
@@ -62,6 +70,9 @@ class Sweep {
  private:
   /// Minimum over the step of the cutter's distance; the minimising parameter in `best`.
   double sampled(const Eigen::Vector3d& p, double& best) const;
+  /// XY distance from p to a height-keeping step's path, with its gradient (unit, or zero
+  /// on the path).
+  double flatRho(const Eigen::Vector3d& p, Eigen::Vector2d* gradient) const;
   /// Closed-form distance of a step that keeps its height.
   double flatDistance(const Eigen::Vector3d& p) const;
 

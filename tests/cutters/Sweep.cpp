@@ -95,3 +95,40 @@ TEST_CASE("a ball end mill's ramp is a thickened parallelogram", "[cutters]") {
   CHECK(g.y() == Approx(1.0).margin(1e-9));
   CHECK(g.norm() == Approx(1.0));
 }
+
+TEST_CASE("near a flat bottom's rim the swept solid is two faces", "[cutters]") {
+  // A flat end mill (r = 3) along +X at z = 0: the slot's side at y = 3 and its floor at
+  // z = 0 meet at the rim. Beside the rim: the floor's face (normal -z, distance -z) and the
+  // side's (normal +y, distance y - 3), exactly (both faces are planes here).
+  const AptCutter flat = AptCutter::flat(6.0, 18.0);
+  REQUIRE(flat.corners().size() == 2);  // the bottom rim and the top rim
+  CHECK(flat.corners()[0].at.isApprox(Eigen::Vector2d(3.0, 0.0)));
+  CHECK(AptCutter::ball(6.0, 18.0).corners().size() == 1);  // only the top rim
+  StepPath p;
+  p.start = {0, 0, 0};
+  p.end = {10, 0, 0};
+  const Sweep s(flat, p, 0.1);
+  Eigen::Vector3d n[2];
+  double d[2];
+  int count = 0;
+  s.localFaces({5.0, 3.05, -0.02}, 0.2, n, d, count);
+  REQUIRE(count == 2);
+  CHECK((n[0] - Eigen::Vector3d(0, 0, -1)).norm() < 1e-12);
+  CHECK(d[0] == Approx(0.02).margin(1e-12));
+  CHECK((n[1] - Eigen::Vector3d(0, 1, 0)).norm() < 1e-12);
+  CHECK(d[1] == Approx(0.05).margin(1e-12));
+  // Away from the rim: one face, the tangent plane of the distance (the floor here).
+  s.localFaces({5.0, 1.0, -0.05}, 0.2, n, d, count);
+  REQUIRE(count == 1);
+  CHECK((n[0] - Eigen::Vector3d(0, 0, -1)).norm() < 1e-9);
+  CHECK(d[0] == Approx(0.05).margin(1e-9));
+  // A plunge keeps its lowest rim: the same two faces at the bottom of its cylinder.
+  StepPath plunge;
+  plunge.start = {0, 0, 5};
+  plunge.end = {0, 0, 0};
+  const Sweep down(flat, plunge, 0.1);
+  down.localFaces({3.05, 0.0, -0.02}, 0.2, n, d, count);
+  REQUIRE(count == 2);
+  CHECK((n[1] - Eigen::Vector3d(1, 0, 0)).norm() < 1e-12);
+  CHECK(d[1] == Approx(0.05).margin(1e-12));
+}

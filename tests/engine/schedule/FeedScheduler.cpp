@@ -235,7 +235,8 @@ TEST_CASE("a jerk limit leaves room for the controller's S-curve before a load p
   o.acceleration = 500.0;
   o.minChange = 0.02;
   const Schedule loose = scheduleFeeds(path, sim, o);
-  o.jerk = 2000.0;  // mm/s^3: a^2/j = 125 mm/s, so every change here is a triangle
+  const double jerk = 500.0;  // mm/s^3: a^2/j = 500 mm/s, so every change here is a triangle
+  o.jerk = jerk;
   const Schedule sc = scheduleFeeds(path, sim, o);
   const auto& st = sim.steps;
   auto feedStep = [&](std::size_t i) { return st[i].kind != MoveKind::Rapid && st[i].feed > 0; };
@@ -243,7 +244,7 @@ TEST_CASE("a jerk limit leaves room for the controller's S-curve before a load p
   for (std::size_t i = 0; i < st.size(); ++i)
     for (std::size_t k = i + 1; k < st.size() && feedStep(i); ++k) {
       if (!feedStep(k)) break;
-      const double need = changeDistance(sc.feed[i] / 60, sc.feed[k] / 60, 500.0, 2000.0);
+      const double need = changeDistance(sc.feed[i] / 60, sc.feed[k] / 60, 500.0, jerk);
       REQUIRE(need <= st[k].arcLength - st[i].arcLength + 1e-9);
       ++pairs;
     }

@@ -1,0 +1,29 @@
+#pragma once
+/// \file CubeClip.h
+/// Volume of a voxel cut by planes: the voxel is the unit cube [-1/2, 1/2]^3 (coordinates in
+/// voxel sizes about its centre) and each half-space keeps {u : n . u <= a}. Exact for planes
+/// (the cube is split into six tetrahedra along its diagonal, each clipped plane by plane), so
+/// one voxel can hold the material between two surfaces (a wall and the cut that crosses it)
+/// instead of only a fraction.
+
+#include <Eigen/Core>
+
+namespace engage {
+
+/// {u : n . u <= a}, u in voxel sizes from the voxel's centre. n = 0 with a >= 0 keeps all.
+struct HalfSpace {
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  double a = 1.0;
+  /// The other side: {u : n . u >= a}.
+  HalfSpace complement() const { return {-n, -a}; }
+};
+
+/// Fraction of the unit cube inside all `count` (at most 8) half-spaces; with `centroid`,
+/// also the centroid of that part (the cube's centre, 0, when it is the whole cube or none).
+double cubeFraction(const HalfSpace* planes, int count, Eigen::Vector3d* centroid = nullptr);
+
+inline double cubeFraction(const HalfSpace& p) {
+  return cubeFraction(&p, 1);
+}
+
+}  // namespace engage
