@@ -116,12 +116,19 @@ constexpr int kStockFace = -1000000000;
 constexpr double kNoise = 1e-6;
 
 /// The planes of the partial voxels of one leaf: slot[offset] is 0 for none, else one more
-/// than the index of the voxel's planes (no table until one voxel has planes). A voxel keeps
-/// its entry once it has one (at most Leaf::SIZE per leaf); a voxel that turns to air is
-/// never visited again.
+/// than the index of the voxel's planes (no table until one voxel has planes). A voxel that
+/// turns to air (never visited again) leaves its entry to the next voxel that needs one.
 struct LeafPlanes {
   std::vector<std::uint16_t> slot;  ///< Leaf::SIZE entries once a voxel has planes
   std::vector<VoxelPlanes> planes;
+  std::vector<std::uint16_t> unused;  ///< entries of voxels that turned to air, for reuse
+
+  /// The voxel turned to air: its entry is free for another.
+  void release(openvdb::Index offset) {
+    if (slot.empty() || slot[offset] == 0) return;
+    unused.push_back(slot[offset]);
+    slot[offset] = 0;
+  }
 
   int get(openvdb::Index offset, HalfSpace out[2], int made[2], double& held) const {
     if (slot.empty()) return 0;
@@ -140,8 +147,13 @@ struct LeafPlanes {
            int madeSecond, double held) {
     if (slot.empty()) slot.assign(Leaf::SIZE, 0);
     if (slot[offset] == 0) {
-      planes.emplace_back();
-      slot[offset] = static_cast<std::uint16_t>(planes.size());
+      if (unused.empty()) {
+        planes.emplace_back();
+        slot[offset] = static_cast<std::uint16_t>(planes.size());
+      } else {
+        slot[offset] = unused.back();
+        unused.pop_back();
+      }
     }
     VoxelPlanes& p = planes[slot[offset] - 1u];
     const HalfSpace* both[2] = {&first, &second};
@@ -215,7 +227,7 @@ HalfSpace planeLeaving(const Eigen::Vector3d& n, double share) {
 /// plane, the cut's boundary. A partial voxel holds the material between up to two earlier
 /// planes (a stock face, the previous pass's wall, the last cut): the cut takes the share of
 /// that material inside it, and the voxel keeps the cut's plane and the earlier plane that
-/// bounds the rest more tightly. Where two surfaces cross one voxel (the front of a side cut
+/// alone leaves less of the cube. Where two surfaces cross one voxel (the front of a side cut
 /// meeting the previous pass's wall, a helix turn meeting the last turn's floor) a fraction
 /// alone cannot say how much of the material the cut reaches: min(before, 1 - cut) assumed
 /// all or none of it, which cost 0.8 % per step on a side cut and 2 % on a helix at
@@ -590,7 +602,8 @@ Box3 VoxelStock::bounds() const {
 std::size_t VoxelStock::memoryBytes() const {
   std::size_t bytes = impl_->grid->memUsage();
   for (const auto& [key, leaf] : impl_->planes)
-    bytes += sizeof(key) + sizeof(leaf) + leaf.slot.capacity() * sizeof(std::uint16_t) +
+    bytes += sizeof(key) + sizeof(leaf) +
+             (leaf.slot.capacity() + leaf.unused.capacity()) * sizeof(std::uint16_t) +
              leaf.planes.capacity() * sizeof(VoxelPlanes);
   if (impl_->removed)
     bytes += impl_->removed->memUsage() + impl_->step->memUsage() + impl_->mrr->memUsage();
@@ -681,7 +694,10 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
           r.volume += lost * voxelVolume;
           ++r.changed;
           leaf.setValueOnly(offset, std::max(after, 0.0f));
-          if (after <= 0.0f) leaf.setValueOff(offset);  // air: skipped from now on
+          if (after <= 0.0f) {  // air: skipped from now on
+            leaf.setValueOff(offset);
+            planes.release(offset);
+          }
           if (s.capture) r.lost.emplace_back(ijk, before - std::max(after, 0.0f));
           // Engagement geometry relative to the tip at the step's end. A voxel stands for
           // material up to (lost fraction - 1/2) h beyond its centre, which places a boundary
