@@ -108,6 +108,9 @@ struct VoxelPlanes {
   std::array<int, 2> made{};
   /// The cube's share inside both, or NaN until needed (kept to save clipping it again).
   float held = std::numeric_limits<float>::quiet_NaN();
+  /// The material is inside either plane (the inside corner a flat bottom's rim leaves,
+  /// floor and wall) instead of inside both.
+  bool united = false;
 };
 constexpr int kStockFace = -1000000000;
 /// Share of a voxel below which two plane estimates are the same: the planes are stored as
@@ -130,7 +133,7 @@ struct LeafPlanes {
     slot[offset] = 0;
   }
 
-  int get(openvdb::Index offset, HalfSpace out[2], int made[2], double& held) const {
+  int get(openvdb::Index offset, HalfSpace out[2], int made[2], double& held, bool& united) const {
     if (slot.empty()) return 0;
     const std::uint16_t k = slot[offset];
     if (k == 0) return 0;
@@ -141,10 +144,11 @@ struct LeafPlanes {
       made[i] = p.made[i];
     }
     held = static_cast<double>(p.held);
+    united = p.united;
     return 2;
   }
   void set(openvdb::Index offset, const HalfSpace& first, int madeFirst, const HalfSpace& second,
-           int madeSecond, double held) {
+           int madeSecond, double held, bool united = false) {
     if (slot.empty()) slot.assign(Leaf::SIZE, 0);
     if (slot[offset] == 0) {
       if (unused.empty()) {
@@ -164,6 +168,7 @@ struct LeafPlanes {
     }
     p.made = {madeFirst, madeSecond};
     p.held = static_cast<float>(held);
+    p.united = united;
   }
 };
 
@@ -217,6 +222,78 @@ HalfSpace planeLeaving(const Eigen::Vector3d& n, double share) {
   return HalfSpace{n, a};
 }
 
+/// Share of the cube inside the material of planes q (inside both, or with `united` inside
+/// either) and inside all of `extra`; with `centroid`, that part's centroid.
+double materialShare(const HalfSpace q[2], bool united, const HalfSpace* extra, int count,
+                     Eigen::Vector3d* centroid = nullptr) {
+  std::array<HalfSpace, 4> all;
+  auto with = [&](int from, int to) {  // q[from .. to) and the extra planes
+    int n = 0;
+    for (int i = from; i < to; ++i)
+      all[static_cast<std::size_t>(n++)] = q[i];
+    for (int k = 0; k < count; ++k)
+      all[static_cast<std::size_t>(n++)] = extra[k];
+    return n;
+  };
+  if (!united) return cubeFraction(all.data(), with(0, 2), centroid);
+  // Inclusion-exclusion: |A u B| = |A| + |B| - |A n B|, and the same for the moments.
+  Eigen::Vector3d ca, cb, cab;
+  const double va = cubeFraction(all.data(), with(0, 1), &ca);
+  const double vb = cubeFraction(all.data(), with(1, 2), &cb);
+  const double vab = cubeFraction(all.data(), with(0, 2), &cab);
+  const double v = va + vb - vab;
+  if (centroid)
+    *centroid =
+        v > 0.0 ? Eigen::Vector3d((va * ca + vb * cb - vab * cab) / v) : Eigen::Vector3d::Zero();
+  return v;
+}
+
+/// remaining() for a voxel whose material is inside either of its planes q (an inside
+/// corner: the floor and wall a flat bottom's rim left), held its share of the cube.
+double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double before,
+                 LeafPlanes& planes, openvdb::Index offset, int serial, const HalfSpace q[2],
+                 int made[2], double held, const HalfSpace cut[2], int faces, double cutShare,
+                 const HalfSpace& kept) {
+  if (std::isnan(held)) held = materialShare(q, true, nullptr, 0);
+  if (!(held > 0.0)) return std::min(before, 1.0 - cutShare);
+  if (made[0] >= serial - 1 || made[1] >= serial - 1) {
+    // The same pass's next step: nested, as for one plane (see remaining()).
+    if (1.0 - cutShare >= held - kNoise) {
+      made[0] = made[1] = serial;
+      planes.set(offset, q[0], made[0], q[1], made[1], held, true);
+      return before;
+    }
+    if (faces == 2)
+      planes.set(offset, cut[0].complement(), serial, cut[1].complement(), serial, 1.0 - cutShare,
+                 true);
+    else
+      planes.set(offset, kept, serial, HalfSpace{}, kStockFace, 1.0 - cutShare);
+    return before * (1.0 - cutShare) / held;
+  }
+  // Another pass across the corner: what the cut takes of floor or wall, exactly.
+  Eigen::Vector3d centroid;
+  const double taken = materialShare(q, true, cut, faces, &centroid);
+  if (!(taken > kNoise)) return before;
+  if (sweep.signedDistance(p + h * centroid) > 0.0) return before;  // a tangent-plane gap
+  const double left = held - taken;
+  // What is left is floor or wall, less the cut: as the corner of one old plane and one of
+  // the cut's faces, the pair whose share is nearest.
+  int bestI = 0, bestJ = 0;
+  double bestShare = -1.0;
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < faces; ++j) {
+      const HalfSpace pair[2] = {q[i], cut[j].complement()};
+      const double share = materialShare(pair, true, nullptr, 0);
+      if (bestShare < 0.0 || std::abs(share - left) < std::abs(bestShare - left)) {
+        bestShare = share;
+        bestI = i;
+        bestJ = j;
+      }
+    }
+  planes.set(offset, q[bestI], made[bestI], cut[bestJ].complement(), serial, bestShare, true);
+  return before * std::max(0.0, left) / held;
+}
+
 /// The material fraction left in the voxel at p (size h) that held `before` once the swept
 /// solid is removed; updates the voxel's planes. `serial` numbers this removal.
 ///
@@ -258,7 +335,8 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   HalfSpace q[2];
   int made[2] = {kStockFace, kStockFace};
   double held = std::numeric_limits<double>::quiet_NaN();
-  bool known = before < 1.0 && planes.get(offset, q, made, held) != 0;
+  bool united = false;
+  bool known = before < 1.0 && planes.get(offset, q, made, held, united) != 0;
   if (!known && before < 1.0 && box) {  // a voxel of the stock box's shell, not cut before
     boxFaces(*box, p, h, q);
     held = std::numeric_limits<double>::quiet_NaN();
@@ -266,10 +344,18 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   }
   if (!known) {  // all material (or, from dexels, a fraction without planes)
     const double after = std::min(before, 1.0 - cutShare);
-    if (after > 0.0 && after < before)
-      planes.set(offset, kept, serial, HalfSpace{}, kStockFace, 1.0 - cutShare);
+    if (after > 0.0 && after < before) {
+      if (faces == 2)  // floor or wall: exactly what a wedge leaves
+        planes.set(offset, cut[0].complement(), serial, cut[1].complement(), serial, 1.0 - cutShare,
+                   true);
+      else
+        planes.set(offset, kept, serial, HalfSpace{}, kStockFace, 1.0 - cutShare);
+    }
     return after;
   }
+  if (united)
+    return cutCorner(sweep, p, h, before, planes, offset, serial, q, made, held, cut, faces,
+                     cutShare, kept);
   // The planes' share of the cube, clipped only where needed (NaN until then).
   auto heldKnown = [&] {
     if (std::isnan(held)) held = cubeFraction(q, 2);
@@ -325,6 +411,30 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   // two planes tangent to one convex surface (the tool's cylinder at the end of a pass, met
   // again by the retract, against the wall an earlier step left), not material cut.
   if (sweep.signedDistance(p + h * centroid) > 0.0) return before;
+  if (faces == 2) {
+    // Across a flat bottom's rim: what is left is the old material less a wedge. Keep the
+    // two planes whose material's share is nearest: an old plane and one face of the cut
+    // (a floor the rim ran along), or the wedge's own inside corner.
+    HalfSpace best[2] = {cut[0].complement(), cut[1].complement()};
+    int bestMade[2] = {serial, serial};
+    bool bestUnited = true;
+    double bestShare = materialShare(best, true, nullptr, 0);
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2 && m[i].n.squaredNorm() > 0.0; ++j) {
+        const HalfSpace pair[2] = {m[i], cut[j].complement()};
+        const double share = cubeFraction(pair, 2);
+        if (std::abs(share - left) < std::abs(bestShare - left)) {
+          best[0] = pair[0];
+          best[1] = pair[1];
+          bestMade[0] = made[i];
+          bestMade[1] = serial;
+          bestUnited = false;
+          bestShare = share;
+        }
+      }
+    planes.set(offset, best[0], bestMade[0], best[1], bestMade[1], bestShare, bestUnited);
+    return before * std::max(0.0, left) / held;
+  }
   // Keep the cut's plane and the earlier plane that alone leaves less of the cube.
   const double alone0 = m[0].n.squaredNorm() > 0.0 ? cubeFraction(m[0]) : 2.0;
   const double alone1 = m[1].n.squaredNorm() > 0.0 ? cubeFraction(m[1]) : 2.0;

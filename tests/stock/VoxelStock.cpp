@@ -3,12 +3,10 @@
 //
 // Resolution: h = D / 20 (10 voxels across the cutter radius, the simulator's default) and
 // steps of L = 2.5 h. Per-step errors are boundary effects of planes standing in for curved
-// surfaces and sharp edges inside one voxel. Steps that keep their height (slots, side cuts,
-// arcs: the swept solid in closed form, a flat bottom's rim as two faces) stay within the
-// issue's 0.5 % per step; what remains is a small bias (means 0.1-0.2 %): the floor-wall
-// corner a previous pass left is held as one plane, and the next pass's cut across it takes a
-// little of the floor. Steps that change height (ramps, helices) with a flat end mill are
-// still 1.9-2.2 % at worst: their rim is one tangent plane, not two faces.
+// surfaces inside one voxel. Steps that keep their height (slots, side cuts, arcs: the swept
+// solid in closed form, a flat bottom's rim as two faces) and plunges stay within the issue's
+// 0.5 % per step (measured 0.15 % at worst). Steps that change height (ramps, helices) with a
+// flat end mill are still 1.9-2.2 % at worst: there the rim is one tangent plane, not two faces.
 
 #include "stock/VoxelStock.h"
 #include "cutters/CrossSection.h"
@@ -57,7 +55,7 @@ TEST_CASE("full slot at 30 deg: every step removes D x depth x L", "[stock]") {
     const double area = exactCrossSection(c, 100.0, 2.0).area;
     const auto v = pass(s, c, Eigen::Vector3d(0, 0, -2) - 10.0 * kDir, kDir, 20.0, L);
     CHECK(worstRelative(v, area * L) < 0.005);
-    CHECK(std::abs(meanRelative(v, area * L)) < 0.002);  // measured 0.002-0.11 %
+    CHECK(std::abs(meanRelative(v, area * L)) < 0.002);  // measured 0.00-0.11 %
   }
 }
 
@@ -78,10 +76,10 @@ TEST_CASE("side cut at stepover s: every step removes y_G x L", "[stock]") {
     pass(s, c, a - stepover * kSide, kDir, 24.0, 4.0);
     const auto v = pass(s, c, a, kDir, 20.0, L);
     const double expected = exactCrossSection(c, stepover, 2.0).area * L;
-    // Measured worst 0.33 % (flat), 0.10 % (ball), 0.05 % (bull), 0.29 % (taper); means
-    // 0.17 %, 0.07 %, 0.00 %, 0.15 % (the corner bias above).
+    // Measured worst 0.04 % (flat), 0.10 % (ball), 0.05 % (bull), 0.02 % (taper); means
+    // within 0.07 %.
     CHECK(worstRelative(v, expected) < 0.005);
-    CHECK(std::abs(meanRelative(v, expected)) < 0.0025);
+    CHECK(std::abs(meanRelative(v, expected)) < 0.001);
   }
 }
 
@@ -160,7 +158,7 @@ TEST_CASE("helical bore: every step after the first turns the same volume", "[st
     const std::vector<double> v = helix(s, c, Eigen::Vector3d(0.37, 0.11, 0.0), Rh, p, 6.0, L);
     const double expected = helixSteadyStep(Rh, 3.0, p, L);
     const std::size_t skip = v.size() * 4 / 6;
-    // Measured worst 2.21 % (flat: its rim is one tangent plane on steps that change height),
+    // Measured worst 2.17 % (flat: its rim is one tangent plane on steps that change height),
     // 0.10 % (ball); means 0.13 % and 0.04 %.
     CHECK(worstRelative(v, expected, skip) < 0.03);
     CHECK(std::abs(meanRelative(v, expected, skip)) < 0.002);
@@ -205,10 +203,9 @@ TEST_CASE("concave and convex arcs at stepover s: area x speed of the centroid",
     std::vector<double> v;
     for (double a = 0.0; a < 1.5; a += dA)
       v.push_back(s.remove(Sweep(c, arcStep(rho, a, a + dA), h)).volume);
-    // Measured worst 0.30 % (concave), 0.31 % (convex); means 0.15 %, 0.19 % (the corner bias
-    // at the top of this file).
+    // Measured worst 0.09 % (concave), 0.06 % (convex); means within 0.01 %.
     CHECK(worstRelative(v, expected, 2) < 0.005);
-    CHECK(std::abs(meanRelative(v, expected, 2)) < 0.0025);
+    CHECK(std::abs(meanRelative(v, expected, 2)) < 0.001);
   }
 }
 
