@@ -117,6 +117,12 @@ constexpr int kStockFace = -1000000000;
 /// floats (relative rounding 6e-8), and a voxel must not count as cut by rounding (it would
 /// widen the measured engagement to the far side of the tool).
 constexpr double kNoise = 1e-6;
+/// Largest difference between a voxel's fraction and its planes' share for the planes to be
+/// trusted: two planes cannot hold a third surface (a pocket wall's corner at the stock's
+/// top), and where they miss one by this much the voxel falls back to the fraction rule.
+constexpr double kPlanesAgree = 0.05;
+/// Share of a voxel a step must take for the voxel to count in the step's width and depth.
+constexpr double kEngagedShare = 0.01;
 
 /// The planes of the partial voxels of one leaf: slot[offset] is 0 for none, else one more
 /// than the index of the voxel's planes (no table until one voxel has planes). A voxel that
@@ -181,19 +187,20 @@ std::uint64_t leafKey(const Coord& origin) {
 /// The faces of box b that cross the voxel at p (size h) as its planes: the two that cut the
 /// most (all but edge and corner voxels have one or two; a missing one keeps all).
 void boxFaces(const Box3& b, const Eigen::Vector3d& p, double h, HalfSpace out[2]) {
-  std::array<HalfSpace, 6> faces;
-  int n = 0;
+  out[0] = out[1] = HalfSpace{};
+  auto consider = [&](const HalfSpace& f) {  // keep the two with the least offset
+    if (out[0].n.squaredNorm() == 0.0 || f.a < out[0].a) {
+      out[1] = out[0];
+      out[0] = f;
+    } else if (out[1].n.squaredNorm() == 0.0 || f.a < out[1].a) {
+      out[1] = f;
+    }
+  };
   for (int a = 0; a < 3; ++a) {
     const Eigen::Vector3d e = Eigen::Vector3d::Unit(a);
-    if (b.max[a] < p[a] + 0.5 * h)
-      faces[static_cast<std::size_t>(n++)] = {e, (b.max[a] - p[a]) / h};
-    if (b.min[a] > p[a] - 0.5 * h)
-      faces[static_cast<std::size_t>(n++)] = {-e, (p[a] - b.min[a]) / h};
+    if (b.max[a] < p[a] + 0.5 * h) consider({e, (b.max[a] - p[a]) / h});
+    if (b.min[a] > p[a] - 0.5 * h) consider({-e, (p[a] - b.min[a]) / h});
   }
-  std::sort(faces.begin(), faces.begin() + n,
-            [](const HalfSpace& x, const HalfSpace& y) { return x.a < y.a; });
-  out[0] = faces[0];
-  out[1] = faces[1];
 }
 
 /// The plane with outward normal n that leaves `share` of the unit cube inside: the share
@@ -255,7 +262,8 @@ double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
                  int made[2], double held, const HalfSpace cut[2], int faces, double cutShare,
                  const HalfSpace& kept) {
   if (std::isnan(held)) held = materialShare(q, true, nullptr, 0);
-  if (!(held > 0.0)) return std::min(before, 1.0 - cutShare);
+  if (!(held > 0.0 && std::abs(held - before) <= kPlanesAgree))
+    return std::min(before, 1.0 - cutShare);
   if (made[0] >= serial - 1 || made[1] >= serial - 1) {
     // The same pass's next step: nested, as for one plane (see remaining()).
     if (1.0 - cutShare >= held - kNoise) {
@@ -359,7 +367,7 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   // The planes' share of the cube, clipped only where needed (NaN until then).
   auto heldKnown = [&] {
     if (std::isnan(held)) held = cubeFraction(q, 2);
-    return held > 0.0;
+    return held > 0.0 && std::abs(held - before) <= kPlanesAgree;
   };
   // A plane the last removal made or refreshed is this pass's surface, cut again by the
   // next step: nested, the smaller of the material it leaves and the material the new cut
@@ -435,11 +443,15 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
     planes.set(offset, best[0], bestMade[0], best[1], bestMade[1], bestShare, bestUnited);
     return before * std::max(0.0, left) / held;
   }
-  // Keep the cut's plane and the earlier plane that alone leaves less of the cube.
-  const double alone0 = m[0].n.squaredNorm() > 0.0 ? cubeFraction(m[0]) : 2.0;
-  const double alone1 = m[1].n.squaredNorm() > 0.0 ? cubeFraction(m[1]) : 2.0;
-  const int keep = alone0 <= alone1 ? 0 : 1;
-  planes.set(offset, m[keep], made[keep], kept, serial, std::numeric_limits<double>::quiet_NaN());
+  // Keep the cut's plane and the earlier plane that bounds the rest more tightly (by
+  // each pair's share: choosing by each plane alone dropped a wall that a later pass met
+  // again, and that pass cut into it).
+  const HalfSpace first[2] = {m[0], kept}, second[2] = {m[1], kept};
+  const double with0 = m[0].n.squaredNorm() > 0.0 ? cubeFraction(first, 2) : 2.0;
+  const double with1 = m[1].n.squaredNorm() > 0.0 ? cubeFraction(second, 2) : 2.0;
+  const int keep = with0 <= with1 ? 0 : 1;
+  planes.set(offset, m[keep], made[keep], kept, serial,
+             std::min(with0, with1) <= 1.0 ? std::min(with0, with1) : 1.0 - cutShare);
   // The planes' material and the fraction can differ (a third surface, curvature): the
   // planes' share applies to the fraction.
   return before * std::max(0.0, left) / held;
@@ -812,12 +824,15 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
           // Engagement geometry relative to the tip at the step's end. A voxel stands for
           // material up to (lost fraction - 1/2) h beyond its centre, which places a boundary
           // crossing it at the right sub-voxel height (exactly for axis-aligned boundaries).
+          // Slivers of a hundredth of a voxel (a wall a later pass runs along again, its
+          // planes' round-off) count in the volume but do not widen the engagement.
           const Eigen::Vector3d rel = p - end;
+          const double side = rel.head<2>().dot(n);
+          r.lateralMoment += lost * voxelVolume * side;
+          if (lost < kEngagedShare) continue;
           const double reach = (lost - 0.5) * h;
           r.zMin = std::min(r.zMin, rel.z() - reach);
           r.zMax = std::max(r.zMax, rel.z() + reach);
-          const double side = rel.head<2>().dot(n);
-          r.lateralMoment += lost * voxelVolume * side;
           r.sMin = std::min(r.sMin, side - reach);
           r.sMax = std::max(r.sMax, side + reach);
         }
@@ -842,8 +857,10 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
   }
   if (out.voxelsChanged > 0) {
     out.lateral /= out.volume;
-    out.axialDepth = std::min(zMax - std::max(zMin, 0.0), cutter.height());
-    out.radialWidth = sMax - sMin;
+    if (zMax >= zMin) {  // (only slivers: no width, no depth)
+      out.axialDepth = std::max(0.0, std::min(zMax - std::max(zMin, 0.0), cutter.height()));
+      out.radialWidth = sMax - sMin;
+    }
     // Engagement angle: the part of the periphery, at mid depth, with material just outside
     // the cutter after the cut (the arc of the edge that is cutting).
     const double zMid = std::clamp(0.5 * out.axialDepth, 0.0, cutter.height());
