@@ -294,6 +294,20 @@ double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3
   count = 1;
   const double d = signedDistance(p, &normals[0]);
   distances[0] = d;
+  const auto& corners = cutter_.corners();
+  const bool lowerCorner = std::any_of(corners.begin(), corners.end(), [&](const ProfileCorner& c) {
+    return c.at.y() < 0.5 * cutter_.height();
+  });
+  if (!flat_ && !vertical_ && std::abs(d) < radius && lowerCorner) {
+    // A step that changes height: near the rim of the closest instance the swept solid has
+    // an edge that one plane cannot follow; say so (count 0) and let the caller sample.
+    double best = 1.0;
+    sampled(p, best);
+    const Eigen::Vector3d q = p - path_.at(best);
+    const Eigen::Vector2d at(q.head<2>().norm(), q.z());
+    for (const ProfileCorner& c : cutter_.corners())
+      if (c.at.y() < 0.5 * cutter_.height() && (at - c.at).norm() < radius) count = 0;
+  }
   return d;
 }
 

@@ -58,8 +58,12 @@ class Sweep {
   /// {x : normals[i] . (x - p) + distances[i] <= 0} (unit normals pointing out of the solid,
   /// distances in mm): two where a sharp corner of the profile (a flat bottom's edge) is
   /// within `radius` of p on a step that keeps its height or on a plunge or retract, the
-  /// tangent plane of the signed distance otherwise. Returns the signed distance, mm. (`normals[0]`
-  /// is left unset, like the gradient of signedDistance, beyond `resolution` from the surface.)
+  /// tangent plane of the signed distance otherwise. On a step that changes height, near
+  /// the rim of the closest instance (a lower sharp corner within `radius`) the swept solid
+  /// has an edge along the envelope that no pair of planes here follows: `count` is 0 there
+  /// (normals[0], distances[0] still the tangent plane), for the caller to sample. Returns the
+  /// signed distance, mm. (`normals[0]` is left unset, like the gradient of signedDistance, beyond
+  /// `resolution` from the surface.)
   double localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3d normals[2],
                     double distances[2], int& count) const;
   /// World bounding box of the swept solid, mm.

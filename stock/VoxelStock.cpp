@@ -327,19 +327,43 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   if (d >= kHalfDiagonal * h) return before;
   if (d <= -kHalfDiagonal * h) return 0.0;
   HalfSpace cut[2];  // the swept solid in the voxel: inside both (the second may keep all)
+  double sampledShare = -1.0;
+  if (faces == 0) {
+    // Near the rim on a step that changes height: the share from 4 x 4 x 4 sub-cubes, each
+    // with its own plane; the centre's plane stands for the surface. (One plane left a 5 deg
+    // ramp's worst step 1.85 % off and a helical bore's 2.2 %; 2 x 2 x 2 sub-cubes 0.72 % and
+    // 0.78 %; 4 x 4 x 4 0.43 % and 0.45 %, at 2.6 times the cost of 2 x 2 x 2 on a helix.)
+    faces = 1;
+    sampledShare = 0.0;
+    constexpr int kSub = 4;
+    for (int i = 0; i < kSub; ++i)
+      for (int j = 0; j < kSub; ++j)
+        for (int k = 0; k < kSub; ++k) {
+          const Eigen::Vector3d o((i + 0.5) / kSub - 0.5, (j + 0.5) / kSub - 0.5,
+                                  (k + 0.5) / kSub - 0.5);
+          Eigen::Vector3d g = Eigen::Vector3d::Zero();
+          const double dk = sweep.signedDistance(p + h * o, &g);
+          const double gn = g.norm();
+          sampledShare +=
+              cubeFraction(HalfSpace{gn > 0.0 ? Eigen::Vector3d(g / gn) : Eigen::Vector3d::Zero(),
+                                     -dk / (h / kSub)}) /
+              (kSub * kSub * kSub);
+        }
+  }
   for (int j = 0; j < faces; ++j) {
     const double norm = n[j].norm();
     cut[j] = HalfSpace{norm > 0.0 ? Eigen::Vector3d(n[j] / norm) : Eigen::Vector3d::Zero(),
                        -dist[j] / h};
   }
-  const double cutShare = cubeFraction(cut, 2);
+  const double cutShare = sampledShare >= 0.0 ? sampledShare : cubeFraction(cut, 2);
   if (cutShare <= kNoise) return before;
   if (cutShare >= 1.0 - kNoise) return 0.0;
   // What the cut leaves, as one plane: the face's other side, or across a sharp edge the
   // plane normal to the faces' mean normal that leaves the same share.
-  const HalfSpace kept = faces == 1
-                             ? cut[0].complement()
-                             : planeLeaving(-(cut[0].n + cut[1].n).normalized(), 1.0 - cutShare);
+  const HalfSpace kept =
+      faces == 1
+          ? (sampledShare >= 0.0 ? planeLeaving(-cut[0].n, 1.0 - cutShare) : cut[0].complement())
+          : planeLeaving(-(cut[0].n + cut[1].n).normalized(), 1.0 - cutShare);
   HalfSpace q[2];
   int made[2] = {kStockFace, kStockFace};
   double held = std::numeric_limits<double>::quiet_NaN();
