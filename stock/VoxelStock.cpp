@@ -255,12 +255,26 @@ double materialShare(const HalfSpace q[2], bool united, const HalfSpace* extra, 
   return v;
 }
 
+/// Stores as the voxel's planes what the cut (inside `faces` half-spaces, taking `cutShare`)
+/// leaves of a voxel it alone bounds: a wedge's floor-or-wall corner exactly, else the one
+/// plane kept() gives.
+template <typename Kept>
+void keepRestOfCut(LeafPlanes& planes, openvdb::Index offset, const HalfSpace cut[2], int faces,
+                   Kept&& kept, int serial, double cutShare) {
+  if (faces == 2)
+    planes.set(offset, cut[0].complement(), serial, cut[1].complement(), serial, 1.0 - cutShare,
+               true);
+  else
+    planes.set(offset, kept(), serial, HalfSpace{}, kStockFace, 1.0 - cutShare);
+}
+
 /// remaining() for a voxel whose material is inside either of its planes q (an inside
 /// corner: the floor and wall a flat bottom's rim left), held its share of the cube.
+template <typename Kept>
 double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double before,
                  LeafPlanes& planes, openvdb::Index offset, int serial, const HalfSpace q[2],
                  int made[2], double held, const HalfSpace cut[2], int faces, double cutShare,
-                 const HalfSpace& kept) {
+                 Kept&& kept) {
   if (std::isnan(held)) held = materialShare(q, true, nullptr, 0);
   if (!(held > 0.0 && std::abs(held - before) <= kPlanesAgree))
     return std::min(before, 1.0 - cutShare);
@@ -271,11 +285,7 @@ double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
       planes.set(offset, q[0], made[0], q[1], made[1], held, true);
       return before;
     }
-    if (faces == 2)
-      planes.set(offset, cut[0].complement(), serial, cut[1].complement(), serial, 1.0 - cutShare,
-                 true);
-    else
-      planes.set(offset, kept, serial, HalfSpace{}, kStockFace, 1.0 - cutShare);
+    keepRestOfCut(planes, offset, cut, faces, kept, serial, cutShare);
     return before * (1.0 - cutShare) / held;
   }
   // Another pass across the corner: what the cut takes of floor or wall, exactly.
@@ -312,7 +322,7 @@ double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
 /// plane, the cut's boundary. A partial voxel holds the material between up to two earlier
 /// planes (a stock face, the previous pass's wall, the last cut): the cut takes the share of
 /// that material inside it, and the voxel keeps the cut's plane and the earlier plane that
-/// alone leaves less of the cube. Where two surfaces cross one voxel (the front of a side cut
+/// bounds the rest more tightly. Where two surfaces cross one voxel (the front of a side cut
 /// meeting the previous pass's wall, a helix turn meeting the last turn's floor) a fraction
 /// alone cannot say how much of the material the cut reaches: min(before, 1 - cut) assumed
 /// all or none of it, which cost 0.8 % per step on a side cut and 2 % on a helix at
@@ -358,12 +368,20 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   const double cutShare = sampledShare >= 0.0 ? sampledShare : cubeFraction(cut, 2);
   if (cutShare <= kNoise) return before;
   if (cutShare >= 1.0 - kNoise) return 0.0;
-  // What the cut leaves, as one plane: the face's other side, or across a sharp edge the
-  // plane normal to the faces' mean normal that leaves the same share.
-  const HalfSpace kept =
-      faces == 1
-          ? (sampledShare >= 0.0 ? planeLeaving(-cut[0].n, 1.0 - cutShare) : cut[0].complement())
-          : planeLeaving(-(cut[0].n + cut[1].n).normalized(), 1.0 - cutShare);
+  // What the cut leaves, as one plane: the face's other side, or across a sharp edge (or for
+  // a sampled share) the plane normal to the faces' mean normal that leaves the same share.
+  // Searched for only where used: a wedge that cuts a whole voxel keeps its two faces.
+  std::optional<HalfSpace> keptPlane;
+  auto kept = [&]() -> const HalfSpace& {
+    if (!keptPlane)
+      keptPlane =
+          faces == 1 && sampledShare < 0.0
+              ? cut[0].complement()
+              : planeLeaving(faces == 1 ? Eigen::Vector3d(-cut[0].n)
+                                        : Eigen::Vector3d(-(cut[0].n + cut[1].n).normalized()),
+                             1.0 - cutShare);
+    return *keptPlane;
+  };
   HalfSpace q[2];
   int made[2] = {kStockFace, kStockFace};
   double held = std::numeric_limits<double>::quiet_NaN();
@@ -376,13 +394,8 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   }
   if (!known) {  // all material (or, from dexels, a fraction without planes)
     const double after = std::min(before, 1.0 - cutShare);
-    if (after > 0.0 && after < before) {
-      if (faces == 2)  // floor or wall: exactly what a wedge leaves
-        planes.set(offset, cut[0].complement(), serial, cut[1].complement(), serial, 1.0 - cutShare,
-                   true);
-      else
-        planes.set(offset, kept, serial, HalfSpace{}, kStockFace, 1.0 - cutShare);
-    }
+    if (after > 0.0 && after < before)
+      keepRestOfCut(planes, offset, cut, faces, kept, serial, cutShare);
     return after;
   }
   if (united)
@@ -401,14 +414,14 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   // ball side cut, +0.5 % with a flat one).
   for (int i = 0; i < 2; ++i) {
     if (!(made[i] >= serial - 1) || q[i].n.squaredNorm() == 0.0) continue;
-    const HalfSpace alt[2] = {q[1 - i], kept};
     // (The new plane leaving no less of the cube than the stored one is the common case,
     // decided without clipping.)
     const bool deeper = 1.0 - cutShare < cubeFraction(q[i]) - kNoise;
     if (deeper && !heldKnown()) return std::min(before, 1.0 - cutShare);
+    const HalfSpace alt[2] = {q[1 - i], deeper ? kept() : HalfSpace{}};
     const double other = deeper ? cubeFraction(alt, 2) : held;
     if (deeper && other < held - kNoise) {
-      planes.set(offset, q[1 - i], made[1 - i], kept, serial, other);
+      planes.set(offset, q[1 - i], made[1 - i], kept(), serial, other);
       return before * other / held;
     }
     made[i] = serial;
@@ -470,11 +483,11 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   // Keep the cut's plane and the earlier plane that bounds the rest more tightly (by
   // each pair's share: choosing by each plane alone dropped a wall that a later pass met
   // again, and that pass cut into it).
-  const HalfSpace first[2] = {m[0], kept}, second[2] = {m[1], kept};
+  const HalfSpace first[2] = {m[0], kept()}, second[2] = {m[1], kept()};
   const double with0 = m[0].n.squaredNorm() > 0.0 ? cubeFraction(first, 2) : 2.0;
   const double with1 = m[1].n.squaredNorm() > 0.0 ? cubeFraction(second, 2) : 2.0;
   const int keep = with0 <= with1 ? 0 : 1;
-  planes.set(offset, m[keep], made[keep], kept, serial,
+  planes.set(offset, m[keep], made[keep], kept(), serial,
              std::min(with0, with1) <= 1.0 ? std::min(with0, with1) : 1.0 - cutShare);
   // The planes' material and the fraction can differ (a third surface, curvature): the
   // planes' share applies to the fraction.
