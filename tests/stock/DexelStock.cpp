@@ -145,13 +145,7 @@ TEST_CASE("dexel: concave and convex arcs at stepover s, area x speed of the cen
     INFO((side > 0 ? "concave" : "convex"));
     DexelStock s = DexelStock::box(side > 0 ? block(40, 10) : block(rho + 1, 10), h);
     auto arcStep = [&](double r, double a0, double a1) {
-      StepPath p;
-      p.kind = StepPath::Kind::ArcXY;
-      p.center = {0.123, -0.077, 0};
-      p.start = p.center + Eigen::Vector3d(r * std::cos(a0), r * std::sin(a0), -depth);
-      p.end = p.center + Eigen::Vector3d(r * std::cos(a1), r * std::sin(a1), -depth);
-      p.sweepRad = a1 - a0;
-      return p;
+      return arc(Eigen::Vector3d(0.123, -0.077, 0), r, a0, a1, -depth);
     };
     for (double a = 0; a < 2 * kPi; a += 0.2)
       s.remove(Sweep(c, arcStep(rho - side * stepover, a, a + 0.2), h));

@@ -22,6 +22,18 @@ inline StepPath line(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return p;
 }
 
+/// A counter-clockwise XY arc piece of radius r about `centre` (its x, y) from angle a0 to
+/// a1 (radians), the tip at height z.
+inline StepPath arc(const Eigen::Vector3d& centre, double r, double a0, double a1, double z) {
+  StepPath p;
+  p.kind = StepPath::Kind::ArcXY;
+  p.center = centre;
+  p.start = Eigen::Vector3d(centre.x() + r * std::cos(a0), centre.y() + r * std::sin(a0), z);
+  p.end = Eigen::Vector3d(centre.x() + r * std::cos(a1), centre.y() + r * std::sin(a1), z);
+  p.sweepRad = a1 - a0;
+  return p;
+}
+
 /// Volumes of the steps of a helical bore: the tip on a helix of radius `helixRadius` about
 /// the vertical line through `centre` (from `centre` + helixRadius x, at its height), `pitch`
 /// lower per counter-clockwise turn, `turns` turns in arc pieces of `L` (mm of XY arc).

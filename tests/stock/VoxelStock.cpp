@@ -220,13 +220,7 @@ TEST_CASE("concave and convex arcs at stepover s: area x speed of the centroid",
       }
       VoxelStock s = VoxelStock::box(b, h);
       auto arcStep = [&](double r, double a0, double a1) {
-        StepPath p;
-        p.kind = StepPath::Kind::ArcXY;
-        p.center = {0.123, -0.077, 0};
-        p.start = p.center + Eigen::Vector3d(r * std::cos(a0), r * std::sin(a0), -depth);
-        p.end = p.center + Eigen::Vector3d(r * std::cos(a1), r * std::sin(a1), -depth);
-        p.sweepRad = a1 - a0;
-        return p;
+        return arc(Eigen::Vector3d(0.123, -0.077, 0), r, a0, a1, -depth);
       };
       if (side < 0) {
         // Clear everything outside the previous pass radius (rho + s), then cut the pass there.
