@@ -4,8 +4,11 @@
 #include "cutters/Geometry.h"
 #include "cutters/Tolerances.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace engage {
 namespace {
@@ -24,30 +27,83 @@ bool withinSweep(double a, double a0, double sweep) {
   return d <= std::abs(sweep);
 }
 
-/// The point of the parallelogram {o + s a + w b : s, w in [0, 1]} closest to p.
+/// The point of the parallelogram {o + s a + w b : s, w in [0, 1]} closest to p. With
+/// `edge`, where it lies: the unit direction of the edge it is inside of, zero at a corner,
+/// and NaN inside the face.
 Eigen::Vector3d closestOnParallelogram(const Eigen::Vector3d& p, const Eigen::Vector3d& o,
-                                       const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+                                       const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       Eigen::Vector3d* edge = nullptr) {
   const Eigen::Vector3d v = p - o;
   const double aa = a.dot(a), ab = a.dot(b), bb = b.dot(b);
   const double det = aa * bb - ab * ab;
   if (det > 1e-12 * aa * bb) {
     const double s = (bb * a.dot(v) - ab * b.dot(v)) / det;
     const double w = (aa * b.dot(v) - ab * a.dot(v)) / det;
-    if (s >= 0.0 && s <= 1.0 && w >= 0.0 && w <= 1.0) return o + s * a + w * b;
+    if (s >= 0.0 && s <= 1.0 && w >= 0.0 && w <= 1.0) {
+      if (edge) edge->setConstant(std::numeric_limits<double>::quiet_NaN());
+      return o + s * a + w * b;
+    }
   }
   // Outside (or degenerate): the nearest of the four edges.
   const Eigen::Vector3d corners[4] = {o, o + a, o + a + b, o + b};
   Eigen::Vector3d best = o;
-  double bestDistance = 1e300;
+  double bestDistance = 1e300, bestT = 0.0;
+  int bestEdge = 0;
   for (int k = 0; k < 4; ++k) {
-    const Eigen::Vector3d q = closestOnSegment(p, corners[k], corners[(k + 1) % 4]);
+    const Eigen::Vector3d& e0 = corners[k];
+    const Eigen::Vector3d d = corners[(k + 1) % 4] - e0;
+    const double len2 = d.squaredNorm();
+    const double t = len2 > 0.0 ? std::clamp((p - e0).dot(d) / len2, 0.0, 1.0) : 0.0;
+    const Eigen::Vector3d q = e0 + t * d;
     const double dq = (q - p).squaredNorm();
     if (dq < bestDistance) {
       bestDistance = dq;
       best = q;
+      bestT = t;
+      bestEdge = k;
     }
   }
+  if (edge)
+    *edge = bestT > 0.0 && bestT < 1.0
+                ? Eigen::Vector3d((corners[(bestEdge + 1) % 4] - corners[bestEdge]).normalized())
+                : Eigen::Vector3d::Zero();
   return best;
+}
+
+/// The curvature of the surface {f = 0} at its point x with unit normal n (f a signed
+/// distance): the symmetric matrix K on the tangent plane with f(x + u) ~ u^T K u / 2, from
+/// second differences at spacing e along two tangents and their bisector.
+template <typename F>
+Eigen::Matrix3d tangentCurvature(F&& f, const Eigen::Vector3d& x, const Eigen::Vector3d& n,
+                                 double e) {
+  const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+  const double f0 = f(x);
+  auto second = [&](const Eigen::Vector3d& t) {
+    return (f(Eigen::Vector3d(x + e * t)) + f(Eigen::Vector3d(x - e * t)) - 2.0 * f0) / (e * e);
+  };
+  const double k11 = second(t1), k22 = second(t2);
+  const double k12 = second(Eigen::Vector3d((t1 + t2) / std::sqrt(2.0))) - 0.5 * (k11 + k22);
+  return k11 * t1 * t1.transpose() + k22 * t2 * t2.transpose() +
+         k12 * (t1 * t2.transpose() + t2 * t1.transpose());
+}
+
+/// The curvature of the envelope that a surface of curvature K (at a point with normal n)
+/// sweeps moving along v there: none along the motion, and across it the curvature of the
+/// surface's contour seen along v, det K / K_vv (Koenderink), kept within K's principal
+/// curvatures (a cutter's are both of one sign unless its sides lean inward).
+Eigen::Matrix3d envelopeCurvature(const Eigen::Matrix3d& K, const Eigen::Vector3d& n,
+                                  const Eigen::Vector3d& v) {
+  Eigen::Vector3d a = v - v.dot(n) * n;
+  if (a.norm() <= 1e-9 * v.norm()) return K;  // moving along the normal: the tool's own
+  a.normalize();
+  const Eigen::Vector3d b = n.cross(a);
+  const double kaa = a.dot(K * a), kbb = b.dot(K * b), kab = a.dot(K * b);
+  const double mean = 0.5 * (kaa + kbb);
+  const double spread = std::sqrt(0.25 * (kaa - kbb) * (kaa - kbb) + kab * kab);
+  double across = kbb;  // along a direction of no curvature the contour is the section
+  if (std::abs(kaa) > 1e-3 * (std::abs(kaa) + std::abs(kbb) + std::abs(kab)))
+    across = std::clamp((kaa * kbb - kab * kab) / kaa, mean - spread, mean + spread);
+  return across * b * b.transpose();
 }
 
 }  // namespace
@@ -159,12 +215,20 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
   }
 }
 
-double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const {
+double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
+                             Eigen::Matrix3d* curvature) const {
   const double e = resolution_ / 8.0;
+  const double ek = resolution_ / 4.0;  // spacing of the curvature's second differences
+  if (curvature) curvature->setZero();
+  // The curvature is wanted only where the tangent plane crosses the cube of side
+  // `resolution` about p (a voxel that the plane cuts).
+  auto wanted = [&](double d) {  // (the gradient is of unit length up to round-off)
+    return gradient && curvature && std::abs(d) < 0.5 * gradient->lpNorm<1>() * resolution_;
+  };
   if (flat_) {
     // d = P(rho, z) with P the profile's distance: the gradient is P's (central differences
     // in the profile plane) along rho's gradient and the axis.
-    Eigen::Vector2d gradRho;
+    Eigen::Vector2d gradRho = Eigen::Vector2d::Zero();
     const double rho = flatRho(p, gradient ? &gradRho : nullptr);
     const double z = p.z() - path_.start.z();
     if (gradient) {
@@ -174,18 +238,29 @@ double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient
           cutter_.profileSignedDistance(rho, z + e) - cutter_.profileSignedDistance(rho, z - e);
       *gradient = Eigen::Vector3d(dRho * gradRho.x(), dRho * gradRho.y(), dZ) / (2.0 * e);
     }
-    return cutter_.profileSignedDistance(rho, z);
+    const double d = cutter_.profileSignedDistance(rho, z);
+    if (wanted(d) && gradRho.squaredNorm() > 0.0) {
+      const Eigen::Vector3d n = gradient->normalized();
+      *curvature = alongPathCurvature(p - d * n, path_.start.z(), n, gradRho);
+    }
+    return d;
   }
   if (capsuleLine_ && p.z() <= zLow_ + cutter_.height() - cutter_.radius()) {
     // Below every instance's top less r: the distance to the thickened parallelogram is the
-    // swept ball end mill's, exactly (the flat top is at least r away).
+    // swept ball end mill's, exactly (the flat top is at least r away). Its surface is flat
+    // off the parallelogram's face, a cylinder of radius r about an edge, a ball at a corner.
     const double r = cutter_.radius();
     const Eigen::Vector3d o = path_.start + Eigen::Vector3d(0.0, 0.0, r);
-    const Eigen::Vector3d q = closestOnParallelogram(
-        p, o, path_.end - path_.start, Eigen::Vector3d(0.0, 0.0, cutter_.height() - 2.0 * r));
+    Eigen::Vector3d edge;
+    const Eigen::Vector3d q =
+        closestOnParallelogram(p, o, path_.end - path_.start,
+                               Eigen::Vector3d(0.0, 0.0, cutter_.height() - 2.0 * r), &edge);
     const Eigen::Vector3d off = p - q;
     const double dist = off.norm();
-    if (gradient) *gradient = dist > 0.0 ? Eigen::Vector3d(off / dist) : Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d n = dist > 0.0 ? Eigen::Vector3d(off / dist) : Eigen::Vector3d::UnitZ();
+    if (gradient) *gradient = n;
+    if (!std::isnan(edge.x()) && wanted(dist - r))
+      *curvature = (Eigen::Matrix3d::Identity() - n * n.transpose() - edge * edge.transpose()) / r;
     return dist - r;
   }
   // Cheap answers first; the search is needed only near the swept surface. A point deeper
@@ -223,17 +298,50 @@ double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient
                                 f({0, 0, e}) - f({0, 0, -e})) /
                 (2.0 * e);
   }
+  if (wanted(d)) {
+    // The closest instance's surface; where that instance is inside the step, the envelope
+    // of its motion.
+    const Eigen::Vector3d n = gradient->normalized();
+    if (vertical_) {
+      // Along a plunge a whole range of instances can be closest (beside the tool), one of
+      // them with its rim next to p: the swept distance's own second differences (plunges
+      // are few).
+      *curvature = tangentCurvature(
+          [&](const Eigen::Vector3d& x) {
+            double unused = 0.0;
+            return sampled(x, unused);
+          },
+          Eigen::Vector3d(p - d * n), n, ek);
+      return d;
+    }
+    if (path_.kind == StepPath::Kind::ArcXY && n.head<2>().squaredNorm() > 0.0) {
+      // A helix: as the XY arc it turns along (its rise adds a slope of pitch / circumference
+      // to the motion, a small change of the envelope's curvature).
+      *curvature = alongPathCurvature(p - d * n, path_.at(best).z(), n,
+                                      Eigen::Vector2d(n.head<2>().normalized()));
+      return d;
+    }
+    *curvature =
+        tangentCurvature([&](const Eigen::Vector3d& x) { return cutter_.signedDistance(x); },
+                         Eigen::Vector3d(p - path_.at(best) - d * n), n, ek);
+    if (best > 0.0 && best < 1.0) {
+      const double du = std::min({1e-3, best, 1.0 - best});
+      *curvature = envelopeCurvature(*curvature, n, path_.at(best + du) - path_.at(best - du));
+    }
+  }
   return d;
 }
 
-double Sweep::flatRho(const Eigen::Vector3d& p, Eigen::Vector2d* gradient) const {
+double Sweep::flatRho(const Eigen::Vector3d& p, Eigen::Vector2d* gradient, double* bend) const {
   const Eigen::Vector2d q(p.x(), p.y());
   Eigen::Vector2d from = q;  // the path point nearest in XY (rho's gradient points away)
   double rho = 0.0;
+  double curve = 0.0;  // rho's second derivative across its gradient, 1/mm
   if (path_.kind == StepPath::Kind::Line) {
-    from = closestOnSegment(q, Eigen::Vector2d(path_.start.head<2>()),
-                            Eigen::Vector2d(path_.end.head<2>()));
+    const Eigen::Vector2d s0 = path_.start.head<2>(), s1 = path_.end.head<2>();
+    from = closestOnSegment(q, s0, s1);
     rho = (q - from).norm();
+    if (from == s0 || from == s1) curve = rho > 0.0 ? 1.0 / rho : 0.0;  // about an end
   } else {
     const Eigen::Vector2d c = path_.center.head<2>();
     const double r = (path_.start.head<2>() - c).norm();
@@ -245,14 +353,40 @@ double Sweep::flatRho(const Eigen::Vector3d& p, Eigen::Vector2d* gradient) const
     } else if (withinSweep(std::atan2(v.y(), v.x()), a0, path_.sweepRad)) {
       from = c + r * v.normalized();
       rho = std::abs(v.norm() - r);
+      curve = (v.norm() > r ? 1.0 : -1.0) / v.norm();  // circles about the centre
     } else {
       const Eigen::Vector2d s0 = path_.start.head<2>(), s1 = path_.end.head<2>();
       from = (q - s0).norm() <= (q - s1).norm() ? s0 : s1;
       rho = (q - from).norm();
+      curve = rho > 0.0 ? 1.0 / rho : 0.0;
     }
   }
   if (gradient) *gradient = rho > 0.0 ? Eigen::Vector2d((q - from) / rho) : Eigen::Vector2d::Zero();
+  if (bend) *bend = curve;
   return rho;
+}
+
+Eigen::Matrix3d Sweep::alongPathCurvature(const Eigen::Vector3d& foot, double tipZ,
+                                          const Eigen::Vector3d& n,
+                                          const Eigen::Vector2d& radial) const {
+  // The profile's curvature along its tangent m (second differences of its distance), and
+  // across it, along the path, the profile normal's radial part times the bend of the XY
+  // distance's level lines (0 beside a line, 1 / rho about its ends or an arc's centre).
+  const double ek = resolution_ / 4.0;
+  Eigen::Vector2d g;
+  double bend = 0.0;
+  const Eigen::Vector2d at(flatRho(foot, &g, &bend), foot.z() - tipZ);
+  if (g.squaredNorm() == 0.0) g = radial;  // the foot below the path
+  const double nRho = n.head<2>().dot(g);
+  const Eigen::Vector2d tangent(-n.z(), nRho);
+  const double kProfile =
+      (cutter_.profileSignedDistance(at.x() + ek * tangent.x(), at.y() + ek * tangent.y()) +
+       cutter_.profileSignedDistance(at.x() - ek * tangent.x(), at.y() - ek * tangent.y()) -
+       2.0 * cutter_.profileSignedDistance(at.x(), at.y())) /
+      (ek * ek * tangent.squaredNorm());
+  const Eigen::Vector3d m(tangent.x() * g.x(), tangent.x() * g.y(), tangent.y());
+  const Eigen::Vector3d t(-g.y(), g.x(), 0.0);
+  return kProfile * m * m.transpose() / m.squaredNorm() + nRho * bend * t * t.transpose();
 }
 
 double Sweep::flatDistance(const Eigen::Vector3d& p) const {
@@ -260,7 +394,8 @@ double Sweep::flatDistance(const Eigen::Vector3d& p) const {
 }
 
 double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3d normals[2],
-                         double distances[2], int& count) const {
+                         double distances[2], int& count, Eigen::Matrix3d* curvature) const {
+  if (curvature) curvature->setZero();
   if (flat_ || vertical_) {
     // A height-keeping step sweeps the profile along its path; a plunge or retract sweeps it
     // up its axis, and only the lowest instance's lower corners stay on the surface.
@@ -292,7 +427,7 @@ double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3
     }
   }
   count = 1;
-  const double d = signedDistance(p, &normals[0]);
+  const double d = signedDistance(p, &normals[0], curvature);
   distances[0] = d;
   const auto& corners = cutter_.corners();
   const bool lowerCorner = std::any_of(corners.begin(), corners.end(), [&](const ProfileCorner& c) {
@@ -307,6 +442,7 @@ double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3
     const Eigen::Vector2d at(q.head<2>().norm(), q.z());
     for (const ProfileCorner& c : cutter_.corners())
       if (c.at.y() < 0.5 * cutter_.height() && (at - c.at).norm() < radius) count = 0;
+    if (count == 0 && curvature) curvature->setZero();
   }
   return d;
 }

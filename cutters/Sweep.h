@@ -52,8 +52,18 @@ class Sweep {
   /// `gradient`, also its gradient there (unit length up to round-off): the cutter's at the
   /// closest tip position (envelope theorem), from central differences of step resolution/8.
   /// Far from the surface (beyond `resolution`) the value may be a bound of the right sign
-  /// and the gradient is not set.
-  double signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient = nullptr) const;
+  /// and the gradient is not set. With `curvature` (and `gradient`), also the swept
+  /// surface's curvature at the point nearest p, 1/mm: the symmetric matrix K on its tangent
+  /// plane for which the surface lies u^T K u / 2 inside the tangent plane at a tangent
+  /// offset u (positive where the solid is convex). Steps that keep their height: the
+  /// profile's curvature (second differences at a quarter `resolution`) and the path's bend;
+  /// a ball's straight step: in closed form; a helix: as the XY arc it turns along; a plunge
+  /// or retract: second differences of the swept distance; other steps: the closest
+  /// instance's, less its curvature along the motion where the surface is the envelope of
+  /// the motion (the contour of the tool seen along it). Zero where the tangent plane misses
+  /// the cube of side `resolution` about p.
+  double signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient = nullptr,
+                        Eigen::Matrix3d* curvature = nullptr) const;
   /// The swept solid near p (within `radius`, mm) as the points inside `count` half-spaces
   /// {x : normals[i] . (x - p) + distances[i] <= 0} (unit normals pointing out of the solid,
   /// distances in mm): two where a sharp corner of the profile (a flat bottom's edge) is
@@ -63,9 +73,10 @@ class Sweep {
   /// has an edge along the envelope that no pair of planes here follows: `count` is 0 there
   /// (normals[0], distances[0] still the tangent plane), for the caller to sample. Returns the
   /// signed distance, mm. (`normals[0]` is left unset, like the gradient of signedDistance, beyond
-  /// `resolution` from the surface.)
+  /// `resolution` from the surface.) With `curvature`, the tangent plane's curvature as in
+  /// signedDistance where `count` is 1, zero otherwise.
   double localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3d normals[2],
-                    double distances[2], int& count) const;
+                    double distances[2], int& count, Eigen::Matrix3d* curvature = nullptr) const;
   /// World bounding box of the swept solid, mm.
   Box3 bounds() const { return bounds_; }
   const StepPath& path() const { return path_; }
@@ -75,8 +86,15 @@ class Sweep {
   /// Minimum over the step of the cutter's distance; the minimising parameter in `best`.
   double sampled(const Eigen::Vector3d& p, double& best) const;
   /// XY distance from p to a height-keeping step's path, with its gradient (unit, or zero
-  /// on the path).
-  double flatRho(const Eigen::Vector3d& p, Eigen::Vector2d* gradient) const;
+  /// on the path) and the curvature of its level line through p, 1/mm (its second
+  /// derivative across the gradient: 0 beside a line, +-1/distance about a point or an arc's
+  /// centre, negative inside the arc).
+  double flatRho(const Eigen::Vector3d& p, Eigen::Vector2d* gradient, double* bend = nullptr) const;
+  /// The curvature (as in signedDistance) at the surface point `foot` with unit normal n of
+  /// the profile swept along the path's XY trace at tip height tipZ; `radial` stands for the
+  /// XY direction away from the path where the foot is on it.
+  Eigen::Matrix3d alongPathCurvature(const Eigen::Vector3d& foot, double tipZ,
+                                     const Eigen::Vector3d& n, const Eigen::Vector2d& radial) const;
   /// Closed-form distance of a step that keeps its height.
   double flatDistance(const Eigen::Vector3d& p) const;
 

@@ -26,4 +26,10 @@ inline double cubeFraction(const HalfSpace& p) {
   return cubeFraction(&p, 1);
 }
 
+/// The mean over the section of the plane {u : n . u = a} (n of unit length) with the unit
+/// cube of (u - f)^T K (u - f), f = a n the foot of the cube's centre; 0 where the plane
+/// misses the cube. (With K a surface's curvature, half of it is the mean distance from the
+/// surface to its tangent plane at f over the voxel.)
+double sectionMeanSquare(const HalfSpace& plane, const Eigen::Matrix3d& K);
+
 }  // namespace engage

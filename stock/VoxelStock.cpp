@@ -333,7 +333,8 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   Eigen::Vector3d n[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
   double dist[2] = {0.0, 0.0};
   int faces = 1;
-  const double d = sweep.localFaces(p, kHalfDiagonal * h, n, dist, faces);
+  Eigen::Matrix3d curvature;
+  const double d = sweep.localFaces(p, kHalfDiagonal * h, n, dist, faces, &curvature);
   if (d >= kHalfDiagonal * h) return before;
   if (d <= -kHalfDiagonal * h) return 0.0;
   HalfSpace cut[2];  // the swept solid in the voxel: inside both (the second may keep all)
@@ -364,6 +365,16 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
     const double norm = n[j].norm();
     cut[j] = HalfSpace{norm > 0.0 ? Eigen::Vector3d(n[j] / norm) : Eigen::Vector3d::Zero(),
                        -dist[j] / h};
+  }
+  if (faces == 1 && sampledShare < 0.0 && cut[0].n.squaredNorm() > 0.0 && !curvature.isZero()) {
+    // A curved surface leaves its tangent plane by the sagitta u^T K u / 2 (K its curvature,
+    // Sweep::signedDistance): the plane moved by the sagitta's mean over its section of the
+    // voxel holds the surface's share to second order. (The tangent plane alone took 0.73 %
+    // too much on a ball's first plunge step at D / h = 20, its tip a sphere of 10 voxels'
+    // radius entering fresh material; now 0.002 %. The mean over a unit square instead,
+    // h trace(K) / 24, saves 10 % of the run time but is half the sagitta on a wall at
+    // 45 deg to the grid: a flat ramp's worst step 0.51 % instead of 0.42 %.)
+    cut[0].a -= std::clamp(0.5 * h * sectionMeanSquare(cut[0], curvature), -0.25, 0.25);
   }
   const double cutShare = sampledShare >= 0.0 ? sampledShare : cubeFraction(cut, 2);
   if (cutShare <= kNoise) return before;

@@ -132,3 +132,55 @@ TEST_CASE("near a flat bottom's rim the swept solid is two faces", "[cutters]") 
   CHECK((n[1] - Eigen::Vector3d(1, 0, 0)).norm() < 1e-12);
   CHECK(d[1] == Approx(0.05).margin(1e-12));
 }
+
+TEST_CASE("the swept surface's curvature at the point nearest", "[cutters]") {
+  // Closed forms: a wall beside a straight pass is flat; a ball's tip a sphere of its
+  // radius; a flat end mill's side on an XY arc of radius R a cylinder of R + r outside and
+  // R - r inside (negative: the solid is outside it); a ball's straight ramp a cylinder of r
+  // about the path of its centre below it, flat beside. Second differences at a quarter resolution
+  // (0.025 mm) of the closed-form profile distance: 1e-6 relative; the golden-section search of a
+  // plunge: 1e-3 relative.
+  Eigen::Vector3d g;
+  Eigen::Matrix3d K;
+  auto trace = [&](const Sweep& s, const Eigen::Vector3d& p) {
+    s.signedDistance(p, &g, &K);
+    return K.trace();
+  };
+  const AptCutter flat = AptCutter::flat(6.0, 18.0), ball = AptCutter::ball(6.0, 18.0);
+  StepPath line;
+  line.start = {0, 0, 0};
+  line.end = {10, 0, 0};
+  CHECK(trace(Sweep(flat, line, 0.1), {5.0, 3.02, 1.0}) == Approx(0.0).margin(1e-9));
+  // Beside the end: the tool's own cylinder, across the wall only.
+  CHECK(trace(Sweep(flat, line, 0.1), {13.02, 0.0, 1.0}) == Approx(1.0 / 3.0).epsilon(1e-6));
+  CHECK(K(2, 2) == Approx(0.0).margin(1e-9));
+  // Where the tangent plane misses the cube of side `resolution` about the point (0.2 from
+  // the surface here), it is not wanted: zero.
+  CHECK(trace(Sweep(flat, line, 0.1), {13.2, 0.0, 1.0}) == 0.0);
+  StepPath plunge;
+  plunge.start = {0, 0, 5};
+  plunge.end = {0, 0, 0};
+  // Below the tip: the sphere, curvature 1/3 both ways (trace 2/3).
+  CHECK(trace(Sweep(ball, plunge, 0.1), {0.3, 0.2, -0.02}) == Approx(2.0 / 3.0).epsilon(1e-3));
+  StepPath arc;
+  arc.kind = StepPath::Kind::ArcXY;
+  arc.center = {0, 0, 0};
+  arc.start = {10, 0, 0};
+  arc.end = {0, 10, 0};
+  arc.sweepRad = kPi / 2;
+  const double a = kPi / 4;
+  const Sweep band(flat, arc, 0.1);
+  CHECK(trace(band, {13.02 * std::cos(a), 13.02 * std::sin(a), 1.0}) ==
+        Approx(1.0 / 13.0).epsilon(1e-6));
+  CHECK(trace(band, {6.98 * std::cos(a), 6.98 * std::sin(a), 1.0}) ==
+        Approx(-1.0 / 7.0).epsilon(1e-6));
+  StepPath ramp;
+  ramp.start = {0, 0, 0};
+  ramp.end = {10, 0, -2};
+  const Sweep capsule(ball, ramp, 0.1);
+  // 3.02 below the ball centre at x = 5, (5, 0, 2), normal to the path: r + 0.02 from it.
+  const Eigen::Vector3d across = Eigen::Vector3d(2.0, 0.0, 10.0).normalized();
+  CHECK(trace(capsule, Eigen::Vector3d(5.0, 0.0, 2.0) - 3.02 * across) ==
+        Approx(1.0 / 3.0).epsilon(1e-9));
+  CHECK(trace(capsule, {5.0, 3.02, 2.5}) == 0.0);  // beside: the side swept flat
+}

@@ -5,6 +5,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <random>
 
@@ -120,4 +122,59 @@ TEST_CASE("centroids of the clipped part", "[stock]") {
   const HalfSpace keepAll;
   CHECK(cubeFraction(&keepAll, 1, &c) == 1.0);
   CHECK(c.norm() == 0.0);
+}
+
+TEST_CASE("mean square distance from the foot over a plane's section", "[stock]") {
+  // With K = I: the unit square about its centre, 1/12 + 1/12 (any height); the diagonal
+  // plane x = y, a sqrt(2) x 1 rectangle through two cube edges, 2/12 + 1/12; the small
+  // triangle x + y + z = 3/2 - 3 d cut off a corner, equilateral with side 3 sqrt(2) d and
+  // its centroid at the foot, s^2 / 12 = 3 d^2 / 2. With K = e_x e_x^T on the square, 1/12.
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  CHECK(sectionMeanSquare(plane(0, 0, 1, 0.3), I) == Approx(1.0 / 6.0).epsilon(1e-12));
+  CHECK(sectionMeanSquare(plane(1, -1, 0, 0.0), I) == Approx(0.25).epsilon(1e-12));
+  const double d = 0.05;
+  CHECK(sectionMeanSquare(plane(1, 1, 1, (1.5 - 3 * d) / std::sqrt(3.0)), I) ==
+        Approx(1.5 * d * d).epsilon(1e-9));
+  Eigen::Matrix3d xx = Eigen::Matrix3d::Zero();
+  xx(0, 0) = 1.0;
+  CHECK(sectionMeanSquare(plane(0, 0, -1, -0.2), xx) == Approx(1.0 / 12.0).epsilon(1e-12));
+  CHECK(sectionMeanSquare(plane(0, 0, 1, 0.6), I) == 0.0);  // misses the cube
+  // Through the centre normal to a diagonal: the regular hexagon of side sqrt(2)/2, whose
+  // polar moment per area about its centre is 5 s^2 / 12.
+  CHECK(sectionMeanSquare(plane(1, 1, 1, 0.0), I) == Approx(5.0 / 24.0).epsilon(1e-12));
+}
+
+TEST_CASE("mean square over random sections agrees with a fine grid on the plane", "[stock]") {
+  // The mean of (u - f)^T K (u - f) over the points of a 600 x 600 grid of the plane's
+  // square [-1, 1]^2 (about the foot, larger than any section) that fall in the cube: the
+  // grid's error is at the section's boundary, about one grid step (1/300) relative.
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int trial = 0; trial < 40; ++trial) {
+    const HalfSpace h = plane(normal(rng), normal(rng), normal(rng), 0.0);
+    const HalfSpace p{h.n, unit(rng) * 0.45 * h.n.lpNorm<1>()};
+    Eigen::Matrix3d A;
+    for (int i = 0; i < 9; ++i)
+      A(i / 3, i % 3) = normal(rng);
+    const Eigen::Matrix3d K = A + A.transpose();
+    const Eigen::Vector3d f = p.a * p.n;
+    const Eigen::Vector3d t1 = p.n.unitOrthogonal(), t2 = p.n.cross(t1);
+    double sum = 0.0, scale = 0.0;
+    double count = 0.0;
+    const int n = 600;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const Eigen::Vector3d d =
+            (2.0 * (i + 0.5) / n - 1.0) * t1 + (2.0 * (j + 0.5) / n - 1.0) * t2;
+        const Eigen::Vector3d u = f + d;
+        if (u.cwiseAbs().maxCoeff() > 0.5) continue;
+        sum += d.dot(K * d);
+        scale += d.squaredNorm();
+        count += 1.0;
+      }
+    INFO("trial " << trial);
+    // Relative to the mean of |u - f|^2 times |K| (the quadratic form can pass through 0).
+    CHECK(std::abs(sectionMeanSquare(p, K) - sum / count) <= 0.01 * K.norm() * scale / count);
+  }
 }

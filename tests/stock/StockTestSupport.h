@@ -82,6 +82,56 @@ inline std::vector<double> pass(Stock& stock, const AptCutter& c, const Eigen::V
   return v;
 }
 
+/// Volume a convex cutter removes from the half-space z < 0 ramping down into it at angle
+/// `alpha` below the horizontal, tip on the surface at the start, over a horizontal travel x.
+/// New material enters through the tool's front surface only (a convex solid in straight
+/// motion), at the rate of v . n per unit area: over the profile (arc length sigma, radius
+/// rho, outward normal (n_rho, n_z)) and the angle phi about the axis, measured from the
+/// horizontal direction of travel, v . n = n_rho cos(phi) cos(alpha) - n_z sin(alpha), and a
+/// profile point at height z(sigma) above the tip is below the surface once the tip has
+/// travelled z / sin(alpha). So
+///   V = int rho(sigma) Phi(sigma) (s - z(sigma) / sin(alpha))^+ dsigma,  s = x / cos(alpha),
+/// Phi = int_0^2pi (n_rho cos(phi) cos(alpha) - n_z sin(alpha))^+ dphi in closed form, and
+/// the profile integral by the midpoint rule on 20000 pieces per profile segment (the
+/// kink where z(sigma) = s sin(alpha) costs below 1e-7 relative). For a flat end mill it is
+/// tan(alpha) (r x^2 + pi r^2 x).
+inline double rampVolume(const AptCutter& c, double alpha, double x) {
+  const double s = x / std::cos(alpha);
+  auto phi = [&](double nRho, double nZ) {
+    const double a = nRho * std::cos(alpha), b = -nZ * std::sin(alpha);
+    if (b >= a) return 2.0 * kPi * b;
+    if (b <= -a) return 0.0;
+    const double p0 = std::acos(-b / a);
+    return 2.0 * (a * std::sin(p0) + b * p0);
+  };
+  double v = 0.0;
+  for (const ProfileSegment& seg : c.profile()) {
+    const int n = 20000;
+    double a0 = 0.0, sweep = 0.0, length = (seg.end - seg.start).norm();
+    if (seg.kind == ProfileSegment::Kind::Arc) {
+      a0 = std::atan2(seg.start.y() - seg.center.y(), seg.start.x() - seg.center.x());
+      sweep = std::atan2(seg.end.y() - seg.center.y(), seg.end.x() - seg.center.x()) - a0;
+      if (sweep < 0.0) sweep += 2.0 * kPi;  // counter-clockwise from start to end
+      length = seg.radius * sweep;
+    }
+    for (int i = 0; i < n; ++i) {
+      const double u = (i + 0.5) / n;
+      Eigen::Vector2d at, normal;
+      if (seg.kind == ProfileSegment::Kind::Arc) {
+        normal = {std::cos(a0 + u * sweep), std::sin(a0 + u * sweep)};
+        at = seg.center + seg.radius * normal;
+      } else {
+        const Eigen::Vector2d d = (seg.end - seg.start) / length;
+        at = seg.start + u * (seg.end - seg.start);
+        normal = {d.y(), -d.x()};  // the solid is on the left going up the profile
+      }
+      const double travel = s - at.y() / std::sin(alpha);
+      if (travel > 0.0) v += at.x() * phi(normal.x(), normal.y()) * travel * length / n;
+    }
+  }
+  return v;
+}
+
 inline double worstRelative(const std::vector<double>& got, double expected, std::size_t skip = 1) {
   double worst = 0.0;
   for (std::size_t i = skip; i < got.size(); ++i)
