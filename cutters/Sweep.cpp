@@ -27,46 +27,44 @@ bool withinSweep(double a, double a0, double sweep) {
   return d <= std::abs(sweep);
 }
 
-/// The point of the parallelogram {o + s a + w b : s, w in [0, 1]} closest to p. With
-/// `edge`, where it lies: the unit direction of the edge it is inside of, zero at a corner,
-/// and NaN inside the face.
-Eigen::Vector3d closestOnParallelogram(const Eigen::Vector3d& p, const Eigen::Vector3d& o,
-                                       const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+/// The point of the parallelogram `shape` closest to p. With `edge`, where it lies: the unit
+/// direction of the edge it is inside of, zero at a corner, and NaN inside the face.
+Eigen::Vector3d closestOnParallelogram(const Eigen::Vector3d& p, const Parallelogram& shape,
                                        Eigen::Vector3d* edge = nullptr) {
+  const Eigen::Vector3d &o = shape.o, &a = shape.a, &b = shape.b;
   const Eigen::Vector3d v = p - o;
-  const double aa = a.dot(a), ab = a.dot(b), bb = b.dot(b);
-  const double det = aa * bb - ab * ab;
-  if (det > 1e-12 * aa * bb) {
-    const double s = (bb * a.dot(v) - ab * b.dot(v)) / det;
-    const double w = (aa * b.dot(v) - ab * a.dot(v)) / det;
+  const double av = a.dot(v), bv = b.dot(v);
+  if (shape.det > 1e-12 * shape.aa * shape.bb) {
+    const double s = (shape.bb * av - shape.ab * bv) / shape.det;
+    const double w = (shape.aa * bv - shape.ab * av) / shape.det;
     if (s >= 0.0 && s <= 1.0 && w >= 0.0 && w <= 1.0) {
       if (edge) edge->setConstant(std::numeric_limits<double>::quiet_NaN());
       return o + s * a + w * b;
     }
   }
-  // Outside (or degenerate): the nearest of the four edges.
-  const Eigen::Vector3d corners[4] = {o, o + a, o + a + b, o + b};
+  // Outside (or degenerate): the nearest of the four edges o + t a, o + b + t a, o + t b,
+  // o + a + t b (t in [0, 1]).
+  const Eigen::Vector3d start[4] = {o, o + b, o, o + a};
+  const double along[4] = {av, av - shape.ab, bv, bv - shape.ab};  // (p - start) . direction
   Eigen::Vector3d best = o;
   double bestDistance = 1e300, bestT = 0.0;
   int bestEdge = 0;
   for (int k = 0; k < 4; ++k) {
-    const Eigen::Vector3d& e0 = corners[k];
-    const Eigen::Vector3d d = corners[(k + 1) % 4] - e0;
-    const double len2 = d.squaredNorm();
-    const double t = len2 > 0.0 ? std::clamp((p - e0).dot(d) / len2, 0.0, 1.0) : 0.0;
-    const Eigen::Vector3d q = e0 + t * d;
-    const double dq = (q - p).squaredNorm();
+    const bool alongA = k < 2;
+    const double len2 = alongA ? shape.aa : shape.bb;
+    const double t = len2 > 0.0 ? std::clamp(along[k] / len2, 0.0, 1.0) : 0.0;
+    const Eigen::Vector3d point = start[k] + t * (alongA ? a : b);
+    const double dq = (point - p).squaredNorm();
     if (dq < bestDistance) {
       bestDistance = dq;
-      best = q;
+      best = point;
       bestT = t;
       bestEdge = k;
     }
   }
   if (edge)
-    *edge = bestT > 0.0 && bestT < 1.0
-                ? Eigen::Vector3d((corners[(bestEdge + 1) % 4] - corners[bestEdge]).normalized())
-                : Eigen::Vector3d::Zero();
+    *edge = bestT > 0.0 && bestT < 1.0 ? Eigen::Vector3d((bestEdge < 2 ? a : b).normalized())
+                                       : Eigen::Vector3d::Zero();
   return best;
 }
 
@@ -197,6 +195,15 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
   capsuleLine_ = convexLine_ && !vertical_ && ap.cornerCenterRadial == 0.0 &&
                  ap.cornerRadius == ap.radius && ap.taperAngleRad == 0.0 &&
                  ap.bottomAngleRad == 0.0 && ap.height >= 2.0 * ap.radius;
+  if (capsuleLine_) {
+    capsule_.o = path_.start + Eigen::Vector3d(0.0, 0.0, ap.radius);
+    capsule_.a = path_.end - path_.start;
+    capsule_.b = Eigen::Vector3d(0.0, 0.0, ap.height - 2.0 * ap.radius);
+    capsule_.aa = capsule_.a.dot(capsule_.a);
+    capsule_.ab = capsule_.a.dot(capsule_.b);
+    capsule_.bb = capsule_.b.dot(capsule_.b);
+    capsule_.det = capsule_.aa * capsule_.bb - capsule_.ab * capsule_.ab;
+  }
   Eigen::Vector3d lo = extremes.front();
   Eigen::Vector3d hi = extremes.front();
   for (const Eigen::Vector3d& e : extremes) {
@@ -250,11 +257,8 @@ double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient
     // swept ball end mill's, exactly (the flat top is at least r away). Its surface is flat
     // off the parallelogram's face, a cylinder of radius r about an edge, a ball at a corner.
     const double r = cutter_.radius();
-    const Eigen::Vector3d o = path_.start + Eigen::Vector3d(0.0, 0.0, r);
     Eigen::Vector3d edge;
-    const Eigen::Vector3d q =
-        closestOnParallelogram(p, o, path_.end - path_.start,
-                               Eigen::Vector3d(0.0, 0.0, cutter_.height() - 2.0 * r), &edge);
+    const Eigen::Vector3d q = closestOnParallelogram(p, capsule_, &edge);
     const Eigen::Vector3d off = p - q;
     const double dist = off.norm();
     const Eigen::Vector3d n = dist > 0.0 ? Eigen::Vector3d(off / dist) : Eigen::Vector3d::UnitZ();

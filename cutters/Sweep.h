@@ -42,6 +42,13 @@ struct StepPath {
   Eigen::Vector2d feedDirectionAtEnd() const;
 };
 
+/// The parallelogram {o + s a + w b : s, w in [0, 1]}, mm, with its Gram matrix's terms
+/// (a.a, a.b, b.b and its determinant), for closest points.
+struct Parallelogram {
+  Eigen::Vector3d o{0.0, 0.0, 0.0}, a{0.0, 0.0, 0.0}, b{0.0, 0.0, 0.0};
+  double aa = 0.0, ab = 0.0, bb = 0.0, det = 0.0;
+};
+
 /// The swept solid of one step.
 class Sweep {
  public:
@@ -103,6 +110,7 @@ class Sweep {
   bool flat_ = false;            ///< the step keeps its height: closed form
   bool convexLine_ = false;      ///< a straight step of a convex cutter: golden-section search
   bool capsuleLine_ = false;     ///< a straight step of a ball end mill: closed form
+  Parallelogram capsule_;        ///< capsuleLine_: the ball centre's path, up to h - r
   bool vertical_ = false;        ///< a plunge or retract (no horizontal motion)
   double band_ = 0.0;            ///< distances beyond this only need their sign, mm
   double resolution_ = 0.0;      ///< mm

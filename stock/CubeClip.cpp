@@ -5,8 +5,6 @@
 #include <cassert>
 #include <cmath>
 
-#include <Eigen/Geometry>
-
 namespace engage {
 namespace {
 
@@ -187,78 +185,68 @@ double cubeFraction(const HalfSpace* planes, int count, Eigen::Vector3d* centroi
 double sectionMeanSquare(const HalfSpace& plane, const Eigen::Matrix3d& K) {
   const Eigen::Vector3d& n = plane.n;
   if (std::abs(plane.a) >= 0.5 * n.lpNorm<1>()) return 0.0;  // misses the cube
-  // The section's corners are where the plane crosses the cube's edges (n . u - a changes
-  // sign along them), taken in the plane's coordinates (x, y) along t1, t2 from the foot
-  // f = a n and ordered by angle about their mean; then the polygon's area and second
-  // moments in closed form (Green's theorem).
-  const Eigen::Vector3d f = plane.a * n;
-  // Most planes cross only the four faces around the axis k of n's largest component: the
-  // section is the unit square of the other two coordinates (x, y) lifted onto the plane,
-  // uniform in (x, y), so the mean is that of a quadratic over the square: at its centre
-  // u0, plus (g_x^T K g_x + g_y^T K g_y) / 12 with g the lift's derivatives.
+  // With `top` the axis of n's largest component and (x, y) the other two coordinates, the
+  // plane is the lift u(x, y) = u0 + x g_x + y g_y of the (x, y) plane, and the section is
+  // the lift of the unit square's part where |u_top| <= 1/2 (a strip): the square clipped by
+  // two lines, a convex polygon in order. The lift's area element is constant, so the mean is
+  // that of the quadratic q(x, y) = (u - f)^T K (u - f), f = a n, over that polygon: from its
+  // area and first and second moments (Green's theorem). Most planes cross only the four
+  // faces around `top`: the whole square, whose moments are 1, 0 and 1/12.
   int top = 0;
   n.cwiseAbs().maxCoeff(&top);
-  const int x = (top + 1) % 3, y = (top + 2) % 3;
-  if (std::abs(plane.a) + 0.5 * (std::abs(n[x]) + std::abs(n[y])) <= 0.5 * std::abs(n[top])) {
-    Eigen::Vector3d u0 = Eigen::Vector3d::Zero(), gx = Eigen::Vector3d::Zero(), gy = gx;
-    u0[top] = plane.a / n[top];
-    gx[x] = 1.0;
-    gx[top] = -n[x] / n[top];
-    gy[y] = 1.0;
-    gy[top] = -n[y] / n[top];
-    const Eigen::Vector3d r = u0 - f;
-    return r.dot(K * r) + (gx.dot(K * gx) + gy.dot(K * gy)) / 12.0;
-  }
-  const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
-  std::array<Eigen::Vector2d, 12> corner;  // six, or more where the plane meets a vertex
-  int size = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    // The four edges along `axis`: the other two coordinates at +-1/2.
-    const int j = (axis + 1) % 3, k = (axis + 2) % 3;
-    for (const double uj : {-0.5, 0.5})
-      for (const double uk : {-0.5, 0.5}) {
-        const double rest = n[j] * uj + n[k] * uk - plane.a;  // n . u - a at u_axis = 0
-        const double s0 = rest - 0.5 * n[axis], s1 = rest + 0.5 * n[axis];
-        if ((s0 <= 0.0) == (s1 <= 0.0)) continue;
-        Eigen::Vector3d u;
-        u[axis] = -0.5 + s0 / (s0 - s1);
-        u[j] = uj;
-        u[k] = uk;
-        corner[static_cast<std::size_t>(size++)] = {(u - f).dot(t1), (u - f).dot(t2)};
-      }
-  }
-  if (size < 3) return 0.0;
-  Eigen::Vector2d mid = Eigen::Vector2d::Zero();
-  for (int i = 0; i < size; ++i)
-    mid += corner[static_cast<std::size_t>(i)];
-  mid /= size;
-  // Pseudo-angle about the mean, in [0, 4): monotone in the angle, without atan2.
-  std::array<double, 12> key;
-  for (int i = 0; i < size; ++i) {
-    const Eigen::Vector2d d = corner[static_cast<std::size_t>(i)] - mid;
-    const double r = d.y() / (std::abs(d.x()) + std::abs(d.y()) + 1e-300);
-    key[static_cast<std::size_t>(i)] = d.x() >= 0.0 ? 1.0 - r : 3.0 + r;
-  }
-  for (int i = 1; i < size; ++i)  // insertion sort of a few
-    for (int m = i;
-         m > 0 && key[static_cast<std::size_t>(m - 1)] > key[static_cast<std::size_t>(m)]; --m) {
-      std::swap(key[static_cast<std::size_t>(m - 1)], key[static_cast<std::size_t>(m)]);
-      std::swap(corner[static_cast<std::size_t>(m - 1)], corner[static_cast<std::size_t>(m)]);
+  const int ix = (top + 1) % 3, iy = (top + 2) % 3;
+  Eigen::Vector3d u0 = Eigen::Vector3d::Zero(), gx = Eigen::Vector3d::Zero(), gy = gx;
+  u0[top] = plane.a / n[top];
+  gx[ix] = 1.0;
+  gx[top] = -n[ix] / n[top];
+  gy[iy] = 1.0;
+  gy[top] = -n[iy] / n[top];
+  const Eigen::Vector3d r = u0 - plane.a * n;
+  const Eigen::Vector3d Kr = K * r, Kgx = K * gx, Kgy = K * gy;
+  // q = c0 + 2 (bx x + by y) + mxx x^2 + 2 mxy x y + myy y^2
+  const double c0 = r.dot(Kr), bx = gx.dot(Kr), by = gy.dot(Kr);
+  const double mxx = gx.dot(Kgx), mxy = gx.dot(Kgy), myy = gy.dot(Kgy);
+  if (std::abs(plane.a) + 0.5 * (std::abs(n[ix]) + std::abs(n[iy])) <= 0.5 * std::abs(n[top]))
+    return c0 + (mxx + myy) / 12.0;
+  // u_top = u0_top + x gx_top + y gy_top within [-1/2, 1/2]: clip the square by both sides.
+  std::array<Eigen::Vector2d, 8> buffer[2];
+  buffer[0] = {Eigen::Vector2d(-0.5, -0.5), Eigen::Vector2d(0.5, -0.5), Eigen::Vector2d(0.5, 0.5),
+               Eigen::Vector2d(-0.5, 0.5)};
+  int size = 4, from = 0;
+  const Eigen::Vector2d g(gx[top], gy[top]);
+  for (const double side : {1.0, -1.0}) {  // side * (u0_top + g . (x, y)) <= 1/2
+    const auto& in = buffer[from];
+    auto& out = buffer[1 - from];
+    int m = 0;
+    for (int i = 0; i < size; ++i) {
+      const Eigen::Vector2d& p = in[static_cast<std::size_t>(i)];
+      const Eigen::Vector2d& q = in[static_cast<std::size_t>(i + 1 == size ? 0 : i + 1)];
+      const double sp = side * (u0[top] + g.dot(p)) - 0.5, sq = side * (u0[top] + g.dot(q)) - 0.5;
+      if (sp <= 0.0) out[static_cast<std::size_t>(m++)] = p;
+      if ((sp <= 0.0) != (sq <= 0.0))
+        out[static_cast<std::size_t>(m++)] = p + (q - p) * (sp / (sp - sq));
     }
-  double area = 0.0, xx = 0.0, yy = 0.0, xy = 0.0;
-  for (int i = 0; i < size; ++i) {
-    const Eigen::Vector2d& p = corner[static_cast<std::size_t>(i)];
-    const Eigen::Vector2d& q = corner[static_cast<std::size_t>(i + 1 == size ? 0 : i + 1)];
-    const double c = p.x() * q.y() - q.x() * p.y();
-    area += c;
-    xx += c * (p.x() * p.x() + p.x() * q.x() + q.x() * q.x());
-    yy += c * (p.y() * p.y() + p.y() * q.y() + q.y() * q.y());
-    xy += c * (2.0 * p.x() * p.y() + p.x() * q.y() + q.x() * p.y() + 2.0 * q.x() * q.y());
+    size = m;
+    from = 1 - from;
   }
-  if (!(std::abs(area) > 0.0)) return 0.0;
-  // area / 2, xx / 12, yy / 12, xy / 24 are the area and the integrals of x^2, y^2, x y.
-  const double k11 = t1.dot(K * t1), k22 = t2.dot(K * t2), k12 = t1.dot(K * t2);
-  return (k11 * xx / 12.0 + k22 * yy / 12.0 + 2.0 * k12 * xy / 24.0) / (area / 2.0);
+  // Twice the area; 6 x the first moments; 12 x the second (24 x for x y).
+  double area = 0.0, sx = 0.0, sy = 0.0, xx = 0.0, yy = 0.0, xy = 0.0;
+  const auto& poly = buffer[from];
+  for (int i = 0; i < size; ++i) {
+    const Eigen::Vector2d& p = poly[static_cast<std::size_t>(i)];
+    const Eigen::Vector2d& q = poly[static_cast<std::size_t>(i + 1 == size ? 0 : i + 1)];
+    const double cross = p.x() * q.y() - q.x() * p.y();
+    area += cross;
+    sx += cross * (p.x() + q.x());
+    sy += cross * (p.y() + q.y());
+    xx += cross * (p.x() * p.x() + p.x() * q.x() + q.x() * q.x());
+    yy += cross * (p.y() * p.y() + p.y() * q.y() + q.y() * q.y());
+    xy += cross * (2.0 * p.x() * p.y() + p.x() * q.y() + q.x() * p.y() + 2.0 * q.x() * q.y());
+  }
+  if (!(area > 0.0)) return 0.0;
+  const double A = area / 2.0;
+  return c0 + 2.0 * (bx * sx + by * sy) / 6.0 / A +
+         (mxx * xx / 12.0 + 2.0 * mxy * xy / 24.0 + myy * yy / 12.0) / A;
 }
 
 }  // namespace engage
