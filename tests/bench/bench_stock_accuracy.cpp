@@ -4,10 +4,15 @@
 // (helix radius 1.2 mm, pitch 1 mm, arc pieces of 2.5 cells; in steady state every step removes
 // (1.2 + 3)^2 x 1 x dtheta / 2, see tests/stock/DexelStock.cpp); the time per step and the
 // stock's memory, for both stock models. Prints one JSON line per model, case and resolution.
+// Then, at the default resolution (D/20), the same cases' sensitivity to where the grid falls:
+// 5 deg-free ramps (2-10 deg, any direction, any offset to the grid) of a flat and a taper end
+// mill against tests/stock/StockTestSupport.h's rampVolume, and the helical bore at 8 offsets of
+// its axis to the grid: the worst step and the worst total over the configurations.
 
 #include "cutters/CrossSection.h"
 #include "stock/DexelStock.h"
 #include "stock/VoxelStock.h"
+#include "tests/stock/StockTestSupport.h"
 
 #include <chrono>
 #include <cmath>
@@ -110,5 +115,73 @@ int main() {
             static_cast<double>(s.memoryBytes()) / 1e6);
       }
     }
+  // Sensitivity to the grid, D/20. Configurations from fixed low-discrepancy sequences (the
+  // fractional parts of multiples of the golden ratio and of sqrt 2), so every run is the same.
+  auto frac = [](double x) { return x - std::floor(x); };
+  const double h = 0.3, L = 2.5 * h;
+  for (const std::string model : {"voxel", "dexel"}) {
+    auto make = [&](const Box3& b) -> std::unique_ptr<Stock> {
+      if (model == "voxel") return std::make_unique<VoxelStock>(VoxelStock::box(b, h));
+      return std::make_unique<DexelStock>(DexelStock::box(b, h));
+    };
+    for (const AptCutter& t : {AptCutter::flat(6.0, 18.0), AptCutter::taper(6.0, kPi / 12, 18.0)}) {
+      double worst = 0.0, worstTotal = 0.0;
+      const int configs = 8;
+      for (int k = 1; k <= configs; ++k) {
+        const double angle = 0.5 * kPi * frac(k * 0.6180339887);
+        const double alpha = (2.0 + 8.0 * frac(k * 0.4142135624)) * kPi / 180.0;
+        const Eigen::Vector3d d(std::cos(angle), std::sin(angle), 0.0);
+        const Eigen::Vector3d a =
+            -10.0 * d + h * Eigen::Vector3d(frac(k * 0.7548776662), frac(k * 0.5698402910), 0.0);
+        Box3 b;
+        b.min = {-30, -30, -10};
+        b.max = {30, 30, 0};
+        const auto stock = make(b);
+        const Eigen::Vector3d slope = d + std::tan(alpha) * Eigen::Vector3d(0, 0, -1);
+        double total = 0.0;
+        const int steps = 30;
+        for (int i = 0; i < steps; ++i) {
+          StepPath p;
+          p.start = a + i * L * slope;
+          p.end = a + (i + 1) * L * slope;
+          const double v = stock->remove(Sweep(t, p, h)).volume;
+          total += v;
+          // Steps ending deeper than 1.75 cells, as in tests/stock/VoxelStock.cpp.
+          if (i * L * std::tan(alpha) >= 1.75 * h)
+            worst = std::max(worst, std::abs(v / (test::rampVolume(t, alpha, (i + 1) * L) -
+                                                  test::rampVolume(t, alpha, i * L)) -
+                                             1.0));
+        }
+        worstTotal =
+            std::max(worstTotal, std::abs(total / test::rampVolume(t, alpha, steps * L) - 1.0));
+      }
+      std::printf(
+          "{\"model\": \"%s\", \"case\": \"ramp_2_10deg_any_grid\", \"tool\": \"%s\", "
+          "\"D_over_h\": 20, \"configurations\": %d, \"worst_step_error\": %.5f, "
+          "\"worst_total_error\": %.5f}\n",
+          model.c_str(), std::string(shapeName(t.shape())).c_str(), configs, worst, worstTotal);
+    }
+    {
+      double worst = 0.0, worstMean = 0.0;
+      const int configs = 8;
+      for (int k = 1; k <= configs; ++k) {
+        Box3 b;
+        b.min = {-8, -8, -8};
+        b.max = {8, 8, 0};
+        const auto stock = make(b);
+        const Eigen::Vector3d centre(h * frac(k * 0.7548776662), h * frac(k * 0.5698402910), 0.0);
+        const std::vector<double> v = test::helix(*stock, c, centre, 1.2, 1.0, 6.0, L);
+        const double expected = test::helixSteadyStep(1.2, 3.0, 1.0, L);
+        const std::size_t skip = v.size() * 4 / 6;
+        worst = std::max(worst, test::worstRelative(v, expected, skip));
+        worstMean = std::max(worstMean, std::abs(test::meanRelative(v, expected, skip)));
+      }
+      std::printf(
+          "{\"model\": \"%s\", \"case\": \"helix_p1_any_grid\", \"tool\": \"flat\", "
+          "\"D_over_h\": 20, \"configurations\": %d, \"worst_step_error\": %.5f, "
+          "\"worst_mean_error\": %.5f}\n",
+          model.c_str(), configs, worst, worstMean);
+    }
+  }
   return 0;
 }
