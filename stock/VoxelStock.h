@@ -5,8 +5,9 @@
 /// Each voxel (cell-centred, size h) holds the fraction m in [0, 1] of its volume that is
 /// still material, and a partial voxel also the one or two planes that bound that material
 /// (a stock face, a cut). Removing a step's swept solid S replaces S's boundary in each voxel
-/// by the plane of its signed distance and gradient at the centre and takes the exact share
-/// of the material inside that plane (polyhedral clipping, stock/CubeClip.h); the voxel keeps
+/// by the plane of its signed distance and gradient at the centre, moved by the surface's
+/// mean sagitta over the voxel (its curvature), and takes the exact share of the material
+/// inside that plane (polyhedral clipping, stock/CubeClip.h); the voxel keeps
 /// the new plane and the tighter of the earlier ones. This scheme was chosen over a Z-dexel
 /// heightfield and over level-set CSG on measured figures (shared/BUILD-NOTES.md): on a slot
 /// cut at 30 deg to the grid its per-step volume error is well under 0.5 % against 0.13-6 %
