@@ -10,7 +10,18 @@ using namespace engage;
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
+
+/// The XY arc of radius 10 about the origin from (10, 0) to (0, 10), counter-clockwise.
+StepPath quarterArc() {
+  StepPath p;
+  p.kind = StepPath::Kind::ArcXY;
+  p.center = {0, 0, 0};
+  p.start = {10, 0, 0};
+  p.end = {0, 10, 0};
+  p.sweepRad = kPi / 2;
+  return p;
 }
+}  // namespace
 
 TEST_CASE("a horizontal line sweeps a stadium of the profile", "[cutters]") {
   const AptCutter c = AptCutter::flat(6.0, 18.0);
@@ -29,13 +40,7 @@ TEST_CASE("a horizontal line sweeps a stadium of the profile", "[cutters]") {
 
 TEST_CASE("a horizontal arc sweeps a torus-like band", "[cutters]") {
   const AptCutter c = AptCutter::flat(2.0, 10.0);
-  StepPath p;
-  p.kind = StepPath::Kind::ArcXY;
-  p.center = {0, 0, 0};
-  p.start = {10, 0, 0};
-  p.end = {0, 10, 0};
-  p.sweepRad = kPi / 2;
-  const Sweep s(c, p, 0.1);
+  const Sweep s(c, quarterArc(), 0.1);
   const double a = kPi / 4;
   CHECK(s.signedDistance({12 * std::cos(a), 12 * std::sin(a), 1}) == Approx(1.0));  // 2 out - r
   CHECK(s.signedDistance({8 * std::cos(a), 8 * std::sin(a), 1}) == Approx(1.0));
@@ -162,14 +167,8 @@ TEST_CASE("the swept surface's curvature at the point nearest", "[cutters]") {
   plunge.end = {0, 0, 0};
   // Below the tip: the sphere, curvature 1/3 both ways (trace 2/3).
   CHECK(trace(Sweep(ball, plunge, 0.1), {0.3, 0.2, -0.02}) == Approx(2.0 / 3.0).epsilon(1e-3));
-  StepPath arc;
-  arc.kind = StepPath::Kind::ArcXY;
-  arc.center = {0, 0, 0};
-  arc.start = {10, 0, 0};
-  arc.end = {0, 10, 0};
-  arc.sweepRad = kPi / 2;
   const double a = kPi / 4;
-  const Sweep band(flat, arc, 0.1);
+  const Sweep band(flat, quarterArc(), 0.1);
   CHECK(trace(band, {13.02 * std::cos(a), 13.02 * std::sin(a), 1.0}) ==
         Approx(1.0 / 13.0).epsilon(1e-6));
   CHECK(trace(band, {6.98 * std::cos(a), 6.98 * std::sin(a), 1.0}) ==
