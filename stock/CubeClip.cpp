@@ -39,6 +39,7 @@ double clipped(const Tet& t, const HalfSpace* planes, int count, Eigen::Vector3d
   }
   if (nout == 0) return clipped(t, planes + 1, count - 1, moment);
   if (nin == 0) return 0.0;
+  auto v = [&](int i) { return t[static_cast<std::size_t>(i)]; };
   if (count == 1 && !(moment && nin == 2)) {
     // The last plane: the share of the tetrahedron below it in closed form (the distribution
     // of a linear function over a tetrahedron), with x = -s at the inside vertices and
@@ -46,7 +47,6 @@ double clipped(const Tet& t, const HalfSpace* planes, int count, Eigen::Vector3d
     // inside, one less the outside corner's share; two inside,
     // (C D (x^2 + x y + y^2) + (C + D) x y (x + y) + x^2 y^2) / ((C + x)(D + x)(C + y)(D + y)).
     auto at = [&](int i) { return s[static_cast<std::size_t>(i)]; };
-    auto v = [&](int i) { return t[static_cast<std::size_t>(i)]; };
     const double whole = tetVolume(t);
     auto corner = [&](int k, int o0, int o1, int o2, Eigen::Vector3d& centroid) {
       // The share of the corner at vertex k cut off by the plane, and its centroid.
@@ -77,7 +77,6 @@ double clipped(const Tet& t, const HalfSpace* planes, int count, Eigen::Vector3d
     const auto si = static_cast<std::size_t>(i), so = static_cast<std::size_t>(o);
     return Eigen::Vector3d(t[si] + (t[so] - t[si]) * (s[si] / (s[si] - s[so])));
   };
-  auto v = [&](int i) { return t[static_cast<std::size_t>(i)]; };
   // A prism with bottom a0 a1 a2 and top b0 b1 b2 (edges ai-bi) as three tetrahedra.
   auto prism = [&](const Eigen::Vector3d& a0, const Eigen::Vector3d& a1, const Eigen::Vector3d& a2,
                    const Eigen::Vector3d& b0, const Eigen::Vector3d& b1,
