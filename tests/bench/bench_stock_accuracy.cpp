@@ -22,6 +22,17 @@
 #include <vector>
 
 using namespace engage;
+using test::line;
+
+namespace {
+
+/// A box of stock in the named model at cell size h.
+std::unique_ptr<Stock> makeStock(const std::string& model, const Box3& b, double h) {
+  if (model == "voxel") return std::make_unique<VoxelStock>(VoxelStock::box(b, h));
+  return std::make_unique<DexelStock>(DexelStock::box(b, h));
+}
+
+}  // namespace
 
 int main() {
   constexpr double kPi = 3.14159265358979323846;
@@ -39,11 +50,7 @@ int main() {
         Box3 b;
         b.min = {-30, -30, helix ? -12.0 : -6.0};  // the bore goes 6 mm down
         b.max = {30, 30, 0};
-        std::unique_ptr<Stock> stock;
-        if (model == "voxel")
-          stock = std::make_unique<VoxelStock>(VoxelStock::box(b, h));
-        else
-          stock = std::make_unique<DexelStock>(DexelStock::box(b, h));
+        const std::unique_ptr<Stock> stock = makeStock(model, b, h);
         Stock& s = *stock;
         if (helix) {
           // Six turns; the last two are measured (the first four reach steady state).
@@ -54,7 +61,7 @@ int main() {
             return Eigen::Vector3d(Rh * std::cos(k * step), Rh * std::sin(k * step),
                                    -pitch * k * step / (2.0 * kPi));
           };
-          const double expected = (Rh + 3.0) * (Rh + 3.0) * pitch * step / 2.0;
+          const double expected = test::helixSteadyStep(Rh, 3.0, pitch, L);
           double worst = 0.0, sum = 0.0, seconds = 0.0;
           int n = 0;
           for (int k = 0; k < 6 * turn; ++k) {
@@ -81,12 +88,6 @@ int main() {
               1000.0 * seconds / (6 * turn), static_cast<double>(s.memoryBytes()) / 1e6);
           continue;
         }
-        auto line = [](const Eigen::Vector3d& a, const Eigen::Vector3d& e) {
-          StepPath p;
-          p.start = a;
-          p.end = e;
-          return p;
-        };
         const Eigen::Vector3d a = Eigen::Vector3d(0, 0, -2) - 8.0 * dir;
         // The previous pass reaches well beyond both ends of the measured one (steady state).
         if (!slot)
@@ -120,10 +121,6 @@ int main() {
   auto frac = [](double x) { return x - std::floor(x); };
   const double h = 0.3, L = 2.5 * h;
   for (const std::string model : {"voxel", "dexel"}) {
-    auto make = [&](const Box3& b) -> std::unique_ptr<Stock> {
-      if (model == "voxel") return std::make_unique<VoxelStock>(VoxelStock::box(b, h));
-      return std::make_unique<DexelStock>(DexelStock::box(b, h));
-    };
     for (const AptCutter& t : {AptCutter::flat(6.0, 18.0), AptCutter::taper(6.0, kPi / 12, 18.0)}) {
       double worst = 0.0, worstTotal = 0.0;
       const int configs = 8;
@@ -136,15 +133,13 @@ int main() {
         Box3 b;
         b.min = {-30, -30, -10};
         b.max = {30, 30, 0};
-        const auto stock = make(b);
+        const auto stock = makeStock(model, b, h);
         const Eigen::Vector3d slope = d + std::tan(alpha) * Eigen::Vector3d(0, 0, -1);
         double total = 0.0;
         const int steps = 30;
         for (int i = 0; i < steps; ++i) {
-          StepPath p;
-          p.start = a + i * L * slope;
-          p.end = a + (i + 1) * L * slope;
-          const double v = stock->remove(Sweep(t, p, h)).volume;
+          const double v =
+              stock->remove(Sweep(t, line(a + i * L * slope, a + (i + 1) * L * slope), h)).volume;
           total += v;
           // Steps ending deeper than 1.75 cells, as in tests/stock/VoxelStock.cpp.
           if (i * L * std::tan(alpha) >= 1.75 * h)
@@ -168,7 +163,7 @@ int main() {
         Box3 b;
         b.min = {-8, -8, -8};
         b.max = {8, 8, 0};
-        const auto stock = make(b);
+        const auto stock = makeStock(model, b, h);
         const Eigen::Vector3d centre(h * frac(k * 0.7548776662), h * frac(k * 0.5698402910), 0.0);
         const std::vector<double> v = test::helix(*stock, c, centre, 1.2, 1.0, 6.0, L);
         const double expected = test::helixSteadyStep(1.2, 3.0, 1.0, L);
