@@ -312,6 +312,65 @@ double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   return before * std::max(0.0, left) / held;
 }
 
+/// A cut given per sub-cube: the voxel split into kSide^3 sub-cubes, each with the plane of
+/// the swept solid's signed distance at its centre (in its own unit-cube coordinates).
+struct SubCuts {
+  static constexpr int kSide = 4;
+  static constexpr int kCount = kSide * kSide * kSide;
+  std::array<HalfSpace, kCount> plane;
+  static int index(int i, int j, int k) { return (i * kSide + j) * kSide + k; }
+  /// Centre of sub-cube c, in voxel sizes from the voxel's centre.
+  static Eigen::Vector3d centre(int c) {
+    return Eigen::Vector3d((c / (kSide * kSide) + 0.5) / kSide - 0.5,
+                           (c / kSide % kSide + 0.5) / kSide - 0.5,
+                           (c % kSide + 0.5) / kSide - 0.5);
+  }
+  /// Half-space q (voxel coordinates) in the coordinates of sub-cube c.
+  static HalfSpace inSub(const HalfSpace& q, int c) {
+    if (q.n.squaredNorm() == 0.0) return q;  // keeps all
+    return HalfSpace{q.n, kSide * (q.a - q.n.dot(centre(c)))};
+  }
+};
+
+/// remaining() for a cut given per sub-cube (near the rim on a step that changes height) in
+/// a voxel whose material its planes q hold (inside both, or with `united` inside either):
+/// the cut takes, sub-cube by sub-cube, the material inside its plane. (The rule for one
+/// plane, nested or not, would see the cut as the one plane of the voxel's centre: behind a
+/// descending flat end mill the rim of each step dips below the last step's floor across a
+/// corner of the voxel, and that plane, leaving more of the voxel than the floor did, took
+/// nothing there; a 5 deg ramp's floor kept 0.03 of a voxel too much, its worst step 0.57 %
+/// off at D / h = 20 for some placements on the grid, now 0.37 %.)
+template <typename Kept>
+double cutSampled(double before, LeafPlanes& planes, openvdb::Index offset, int serial,
+                  const HalfSpace q[2], const int made[2], double held, bool united,
+                  const SubCuts& sub, double cutShare, Kept&& kept) {
+  if (std::isnan(held)) held = materialShare(q, united, nullptr, 0);
+  if (!(held > 0.0 && std::abs(held - before) <= kPlanesAgree))
+    return std::min(before, 1.0 - cutShare);
+  double taken = 0.0;
+  for (int c = 0; c < SubCuts::kCount; ++c) {
+    const HalfSpace local[2] = {SubCuts::inSub(q[0], c), SubCuts::inSub(q[1], c)};
+    taken += materialShare(local, united, &sub.plane[c], 1) / SubCuts::kCount;
+  }
+  if (!(taken > kNoise)) return before;
+  const double left = std::max(0.0, held - taken);
+  // Keep the cut's plane and the old plane whose pair's share is nearest what is left.
+  double bestShare = -1.0;
+  int keep = 0;
+  for (int i = 0; i < 2; ++i) {
+    if (q[i].n.squaredNorm() == 0.0) continue;
+    const HalfSpace pair[2] = {q[i], kept()};
+    const double share = cubeFraction(pair, 2);
+    if (bestShare < 0.0 || std::abs(share - left) < std::abs(bestShare - left)) {
+      bestShare = share;
+      keep = i;
+    }
+  }
+  planes.set(offset, q[keep], made[keep], kept(), serial,
+             bestShare >= 0.0 ? bestShare : 1.0 - cutShare);
+  return before * left / held;
+}
+
 /// The material fraction left in the voxel at p (size h) that held `before` once the swept
 /// solid is removed; updates the voxel's planes. `serial` numbers this removal.
 ///
@@ -339,6 +398,7 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   if (d <= -kHalfDiagonal * h) return 0.0;
   HalfSpace cut[2];  // the swept solid in the voxel: inside both (the second may keep all)
   double sampledShare = -1.0;
+  SubCuts sub;  // faces == 0: the cut in each sub-cube
   if (faces == 0) {
     // Near the rim on a step that changes height: the share from 4 x 4 x 4 sub-cubes, each
     // with its own plane; the centre's plane stands for the surface. (One plane left a 5 deg
@@ -346,19 +406,16 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
     // 0.78 %; 4 x 4 x 4 0.43 % and 0.45 %, at 2.6 times the cost of 2 x 2 x 2 on a helix.)
     faces = 1;
     sampledShare = 0.0;
-    constexpr int kSub = 4;
-    for (int i = 0; i < kSub; ++i)
-      for (int j = 0; j < kSub; ++j)
-        for (int k = 0; k < kSub; ++k) {
-          const Eigen::Vector3d o((i + 0.5) / kSub - 0.5, (j + 0.5) / kSub - 0.5,
-                                  (k + 0.5) / kSub - 0.5);
+    for (int i = 0; i < SubCuts::kSide; ++i)
+      for (int j = 0; j < SubCuts::kSide; ++j)
+        for (int k = 0; k < SubCuts::kSide; ++k) {
+          const int c = SubCuts::index(i, j, k);
           Eigen::Vector3d g = Eigen::Vector3d::Zero();
-          const double dk = sweep.signedDistance(p + h * o, &g);
+          const double dk = sweep.signedDistance(p + h * SubCuts::centre(c), &g);
           const double gn = g.norm();
-          sampledShare +=
-              cubeFraction(HalfSpace{gn > 0.0 ? Eigen::Vector3d(g / gn) : Eigen::Vector3d::Zero(),
-                                     -dk / (h / kSub)}) /
-              (kSub * kSub * kSub);
+          sub.plane[c] = HalfSpace{gn > 0.0 ? Eigen::Vector3d(g / gn) : Eigen::Vector3d::Zero(),
+                                   -dk * SubCuts::kSide / h};
+          sampledShare += cubeFraction(sub.plane[c]) / SubCuts::kCount;
         }
   }
   for (int j = 0; j < faces; ++j) {
@@ -410,6 +467,8 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
       keepRestOfCut(planes, offset, cut, faces, kept, serial, cutShare);
     return after;
   }
+  if (sampledShare >= 0.0)
+    return cutSampled(before, planes, offset, serial, q, made, held, united, sub, cutShare, kept);
   if (united)
     return cutCorner(sweep, p, h, before, planes, offset, serial, q, made, held, cut, faces,
                      cutShare, kept);
