@@ -26,7 +26,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -312,63 +311,106 @@ double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   return before * std::max(0.0, left) / held;
 }
 
-/// A cut given per sub-cube: the voxel split into kSide^3 sub-cubes, each with the plane of
-/// the swept solid's signed distance at its centre (in its own unit-cube coordinates).
-struct SubCuts {
-  static constexpr int kSide = 4;
-  static constexpr int kCount = kSide * kSide * kSide;
-  std::array<HalfSpace, kCount> plane;
-  static int index(int i, int j, int k) { return (i * kSide + j) * kSide + k; }
-  /// Centre of sub-cube c, in voxel sizes from the voxel's centre.
-  static Eigen::Vector3d centre(int c) {
+/// A partial voxel's material as its planes tell: inside both planes q (or with `united`
+/// inside either), which hold the share `held` of the cube (NaN until clipped).
+struct StoredMaterial {
+  HalfSpace q[2];
+  int made[2] = {kStockFace, kStockFace};
+  double held = std::numeric_limits<double>::quiet_NaN();
+  bool united = false;
+};
+
+/// The stored material of the voxel at p (size h) that holds `before`: its planes, or for a
+/// voxel of the stock box's shell not cut before, the box's faces. False for a voxel all
+/// material (or, from dexels, a fraction without planes).
+bool storedMaterial(const LeafPlanes& planes, openvdb::Index offset, double before, const Box3* box,
+                    const Eigen::Vector3d& p, double h, StoredMaterial& m) {
+  if (!(before < 1.0)) return false;
+  if (planes.get(offset, m.q, m.made, m.held, m.united) != 0) return true;
+  if (!box) return false;
+  boxFaces(*box, p, h, m.q);
+  return true;
+}
+
+/// remaining() near the rim of a flat bottom on a step that changes height, where the swept
+/// solid has an edge along the envelope that no pair of planes follows (Sweep::localFaces
+/// says so): the voxel is split into 4 x 4 x 4 sub-cubes, each with the plane of the signed
+/// distance at its centre, and the cut takes, sub-cube by sub-cube, the material inside it
+/// (of a partial voxel, the material its planes hold). (One plane for the voxel left a 5 deg
+/// ramp's worst step 1.85 % off and a helical bore's 2.2 %; 2 x 2 x 2 sub-cubes 0.72 % and
+/// 0.78 %; 4 x 4 x 4 0.43 % and 0.45 %, at 2.6 times the cost of 2 x 2 x 2 on a helix. Taking
+/// the sub-cubes' share by the rule for one plane, nested in the last step's when that step
+/// made the voxel's plane, took nothing where each step's rim, behind a descending flat end
+/// mill, dips below the last step's floor across a corner of the voxel: a ramp's floor kept
+/// 0.03 of a voxel too much, its worst step 0.57 % off for some placements on the grid at
+/// D / h = 20, now 0.37 %.) The voxel keeps the plane normal to the centre's gradient `n`
+/// that leaves its share, and the old plane that goes with it best. Out of line: its
+/// sub-cubes' planes would weigh on the common path's frame.
+[[gnu::noinline]] double rimRemaining(const Sweep& sweep, const Eigen::Vector3d& p, double h,
+                                      double before, LeafPlanes& planes, openvdb::Index offset,
+                                      int serial, const Box3* box, const Eigen::Vector3d& n,
+                                      double d) {
+  constexpr int kSide = 4, kCount = kSide * kSide * kSide;
+  auto centre = [&](int c) {  // of sub-cube c, in voxel sizes from the voxel's centre
     return Eigen::Vector3d((c / (kSide * kSide) + 0.5) / kSide - 0.5,
                            (c / kSide % kSide + 0.5) / kSide - 0.5,
                            (c % kSide + 0.5) / kSide - 0.5);
+  };
+  std::array<HalfSpace, kCount> sub;  // in each sub-cube's own unit-cube coordinates
+  double cutShare = 0.0;
+  for (int c = 0; c < kCount; ++c) {
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    const double dk = sweep.signedDistance(p + h * centre(c), &g);
+    const double gn = g.norm();
+    sub[c] =
+        HalfSpace{gn > 0.0 ? Eigen::Vector3d(g / gn) : Eigen::Vector3d::Zero(), -dk * kSide / h};
+    cutShare += cubeFraction(sub[c]) / kCount;
   }
-  /// Half-space q (voxel coordinates) in the coordinates of sub-cube c.
-  static HalfSpace inSub(const HalfSpace& q, int c) {
-    if (q.n.squaredNorm() == 0.0) return q;  // keeps all
-    return HalfSpace{q.n, kSide * (q.a - q.n.dot(centre(c)))};
+  if (cutShare <= kNoise) return before;
+  if (cutShare >= 1.0 - kNoise) return 0.0;
+  const double norm = n.norm();
+  const HalfSpace centrePlane{norm > 0.0 ? Eigen::Vector3d(n / norm) : Eigen::Vector3d::Zero(),
+                              -d / h};
+  std::optional<HalfSpace> keptPlane;
+  auto kept = [&]() -> const HalfSpace& {
+    if (!keptPlane) keptPlane = planeLeaving(-centrePlane.n, 1.0 - cutShare);
+    return *keptPlane;
+  };
+  StoredMaterial m;
+  if (!storedMaterial(planes, offset, before, box, p, h, m)) {  // all material
+    const double after = std::min(before, 1.0 - cutShare);
+    if (after > 0.0 && after < before)
+      keepRestOfCut(planes, offset, &centrePlane, 1, kept, serial, cutShare);
+    return after;
   }
-};
-
-/// remaining() for a cut given per sub-cube (near the rim on a step that changes height) in
-/// a voxel whose material its planes q hold (inside both, or with `united` inside either):
-/// the cut takes, sub-cube by sub-cube, the material inside its plane. (The rule for one
-/// plane, nested or not, would see the cut as the one plane of the voxel's centre: behind a
-/// descending flat end mill the rim of each step dips below the last step's floor across a
-/// corner of the voxel, and that plane, leaving more of the voxel than the floor did, took
-/// nothing there; a 5 deg ramp's floor kept 0.03 of a voxel too much, its worst step 0.57 %
-/// off at D / h = 20 for some placements on the grid, now 0.37 %.)
-template <typename Kept>
-double cutSampled(double before, LeafPlanes& planes, openvdb::Index offset, int serial,
-                  const HalfSpace q[2], const int made[2], double held, bool united,
-                  const SubCuts& sub, double cutShare, Kept&& kept) {
-  if (std::isnan(held)) held = materialShare(q, united, nullptr, 0);
-  if (!(held > 0.0 && std::abs(held - before) <= kPlanesAgree))
+  if (std::isnan(m.held)) m.held = materialShare(m.q, m.united, nullptr, 0);
+  if (!(m.held > 0.0 && std::abs(m.held - before) <= kPlanesAgree))
     return std::min(before, 1.0 - cutShare);
   double taken = 0.0;
-  for (int c = 0; c < SubCuts::kCount; ++c) {
-    const HalfSpace local[2] = {SubCuts::inSub(q[0], c), SubCuts::inSub(q[1], c)};
-    taken += materialShare(local, united, &sub.plane[c], 1) / SubCuts::kCount;
+  for (int c = 0; c < kCount; ++c) {
+    HalfSpace local[2];  // the stored planes in sub-cube c's coordinates
+    for (int i = 0; i < 2; ++i)
+      local[i] = m.q[i].n.squaredNorm() == 0.0
+                     ? m.q[i]
+                     : HalfSpace{m.q[i].n, kSide * (m.q[i].a - m.q[i].n.dot(centre(c)))};
+    taken += materialShare(local, m.united, &sub[c], 1) / kCount;
   }
   if (!(taken > kNoise)) return before;
-  const double left = std::max(0.0, held - taken);
-  // Keep the cut's plane and the old plane whose pair's share is nearest what is left.
+  const double left = std::max(0.0, m.held - taken);
   double bestShare = -1.0;
   int keep = 0;
   for (int i = 0; i < 2; ++i) {
-    if (q[i].n.squaredNorm() == 0.0) continue;
-    const HalfSpace pair[2] = {q[i], kept()};
+    if (m.q[i].n.squaredNorm() == 0.0) continue;
+    const HalfSpace pair[2] = {m.q[i], kept()};
     const double share = cubeFraction(pair, 2);
     if (bestShare < 0.0 || std::abs(share - left) < std::abs(bestShare - left)) {
       bestShare = share;
       keep = i;
     }
   }
-  planes.set(offset, q[keep], made[keep], kept(), serial,
+  planes.set(offset, m.q[keep], m.made[keep], kept(), serial,
              bestShare >= 0.0 ? bestShare : 1.0 - cutShare);
-  return before * left / held;
+  return before * left / m.held;
 }
 
 /// The material fraction left in the voxel at p (size h) that held `before` once the swept
@@ -377,7 +419,8 @@ double cutSampled(double before, LeafPlanes& planes, openvdb::Index offset, int 
 /// The swept solid in the voxel is the half-space of the tangent plane of its signed
 /// distance, or near a sharp edge of the cutter (a flat bottom's rim) the wedge between the
 /// two faces (Sweep::localFaces), and it takes its exact share of the material (polyhedral
-/// clipping, stock/CubeClip.h). A voxel that is all material keeps the rest and, as one
+/// clipping, stock/CubeClip.h); near a flat bottom's rim on a step that changes height,
+/// sub-cube by sub-cube (rimRemaining()). A voxel that is all material keeps the rest and, as one
 /// plane, the cut's boundary. A partial voxel holds the material between up to two earlier
 /// planes (a stock face, the previous pass's wall, the last cut): the cut takes the share of
 /// that material inside it, and the voxel keeps the cut's plane and the earlier plane that
@@ -397,34 +440,13 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   if (d >= kHalfDiagonal * h) return before;
   if (d <= -kHalfDiagonal * h) return 0.0;
   HalfSpace cut[2];  // the swept solid in the voxel: inside both (the second may keep all)
-  double sampledShare = -1.0;
-  std::optional<SubCuts> sub;  // faces == 0: the cut in each sub-cube (built only there)
-  if (faces == 0) {
-    // Near the rim on a step that changes height: the share from 4 x 4 x 4 sub-cubes, each
-    // with its own plane; the centre's plane stands for the surface. (One plane left a 5 deg
-    // ramp's worst step 1.85 % off and a helical bore's 2.2 %; 2 x 2 x 2 sub-cubes 0.72 % and
-    // 0.78 %; 4 x 4 x 4 0.43 % and 0.45 %, at 2.6 times the cost of 2 x 2 x 2 on a helix.)
-    faces = 1;
-    sampledShare = 0.0;
-    sub.emplace();
-    for (int i = 0; i < SubCuts::kSide; ++i)
-      for (int j = 0; j < SubCuts::kSide; ++j)
-        for (int k = 0; k < SubCuts::kSide; ++k) {
-          const int c = SubCuts::index(i, j, k);
-          Eigen::Vector3d g = Eigen::Vector3d::Zero();
-          const double dk = sweep.signedDistance(p + h * SubCuts::centre(c), &g);
-          const double gn = g.norm();
-          sub->plane[c] = HalfSpace{gn > 0.0 ? Eigen::Vector3d(g / gn) : Eigen::Vector3d::Zero(),
-                                    -dk * SubCuts::kSide / h};
-          sampledShare += cubeFraction(sub->plane[c]) / SubCuts::kCount;
-        }
-  }
+  if (faces == 0) return rimRemaining(sweep, p, h, before, planes, offset, serial, box, n[0], d);
   for (int j = 0; j < faces; ++j) {
     const double norm = n[j].norm();
     cut[j] = HalfSpace{norm > 0.0 ? Eigen::Vector3d(n[j] / norm) : Eigen::Vector3d::Zero(),
                        -dist[j] / h};
   }
-  if (faces == 1 && sampledShare < 0.0 && cut[0].n.squaredNorm() > 0.0 && !curvature.isZero()) {
+  if (faces == 1 && cut[0].n.squaredNorm() > 0.0 && !curvature.isZero()) {
     // A curved surface leaves its tangent plane by the sagitta u^T K u / 2 (K its curvature,
     // Sweep::signedDistance): the plane moved by the sagitta's mean over its section of the
     // voxel holds the surface's share to second order. (The tangent plane alone took 0.73 %
@@ -435,41 +457,30 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
     // instead of 0.42 %.)
     cut[0].a -= std::clamp(0.5 * h * sectionMeanSquare(cut[0], curvature), -0.25, 0.25);
   }
-  const double cutShare = sampledShare >= 0.0 ? sampledShare : cubeFraction(cut, 2);
+  const double cutShare = cubeFraction(cut, 2);
   if (cutShare <= kNoise) return before;
   if (cutShare >= 1.0 - kNoise) return 0.0;
-  // What the cut leaves, as one plane: the face's other side, or across a sharp edge (or for
-  // a sampled share) the plane normal to the faces' mean normal that leaves the same share.
+  // What the cut leaves, as one plane: the face's other side, or across a sharp edge the
+  // plane normal to the faces' mean normal that leaves the same share.
   // Searched for only where used: a wedge that cuts a whole voxel keeps its two faces.
   std::optional<HalfSpace> keptPlane;
   auto kept = [&]() -> const HalfSpace& {
     if (!keptPlane)
-      keptPlane =
-          faces == 1 && sampledShare < 0.0
-              ? cut[0].complement()
-              : planeLeaving(faces == 1 ? Eigen::Vector3d(-cut[0].n)
-                                        : Eigen::Vector3d(-(cut[0].n + cut[1].n).normalized()),
-                             1.0 - cutShare);
+      keptPlane = faces == 1 ? cut[0].complement()
+                             : planeLeaving(-(cut[0].n + cut[1].n).normalized(), 1.0 - cutShare);
     return *keptPlane;
   };
-  HalfSpace q[2];
-  int made[2] = {kStockFace, kStockFace};
-  double held = std::numeric_limits<double>::quiet_NaN();
-  bool united = false;
-  bool known = before < 1.0 && planes.get(offset, q, made, held, united) != 0;
-  if (!known && before < 1.0 && box) {  // a voxel of the stock box's shell, not cut before
-    boxFaces(*box, p, h, q);
-    held = std::numeric_limits<double>::quiet_NaN();
-    known = true;
-  }
-  if (!known) {  // all material (or, from dexels, a fraction without planes)
+  StoredMaterial stored;
+  if (!storedMaterial(planes, offset, before, box, p, h, stored)) {  // all material
     const double after = std::min(before, 1.0 - cutShare);
     if (after > 0.0 && after < before)
       keepRestOfCut(planes, offset, cut, faces, kept, serial, cutShare);
     return after;
   }
-  if (sampledShare >= 0.0)
-    return cutSampled(before, planes, offset, serial, q, made, held, united, *sub, cutShare, kept);
+  HalfSpace* q = stored.q;
+  int* made = stored.made;
+  double& held = stored.held;
+  const bool united = stored.united;
   if (united)
     return cutCorner(sweep, p, h, before, planes, offset, serial, q, made, held, cut, faces,
                      cutShare, kept);
