@@ -544,6 +544,7 @@ int runPaper(const PaperOptions& o) {
   Progress progress;
   progress.on = isatty(2) && !o.quiet;
   const fs::path dir(o.out), programs = dir / "programs";
+  OutputDirectory outputs(dir);
   fs::create_directories(programs);
   ordered_json j;
   j["source"] =
@@ -592,6 +593,7 @@ int runPaper(const PaperOptions& o) {
       f14["step_length_in"].get<double>());
   std::printf("wrote %s/{paper.json, fig8*, fig9*, fig12*, fig14*, programs/} in %.0f s\n",
               o.out.c_str(), seconds);
+  outputs.keep();
   return 0;
 }
 

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace engage::app {
@@ -76,8 +77,10 @@ int runPocket(const PocketCommandOptions& c) {
   // Everything is made before the file is written.
   const PocketProgram p = makePocketProgram(c);
   const std::filesystem::path parent = std::filesystem::path(c.output).parent_path();
-  if (!parent.empty()) std::filesystem::create_directories(parent);
+  std::optional<OutputDirectory> folder;
+  if (!parent.empty()) folder.emplace(parent);
   writeAtomically(c.output, p.text);
+  if (folder) folder->keep();
   std::printf("%zu rings on %d level(s): %zu arcs, %zu lines; wrote %s\n", p.rings, p.levels,
               p.arcs, p.lines, c.output.c_str());
   if (p.cornerWarning)

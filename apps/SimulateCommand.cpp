@@ -180,6 +180,10 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
     if (auto* dexels = dynamic_cast<DexelStock*>(stockStore.get())) dexels->captureRemoved(true);
   }
 
+  // The output folder, made (and checked) before any work.
+  const std::filesystem::path dir(o.out);
+  OutputDirectory outputs(dir);
+
   const bool tty = isatty(2) && !o.quiet;
   auto last = std::chrono::steady_clock::now();
   if (tty)
@@ -230,8 +234,6 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
   }
 
   // Outputs.
-  const std::filesystem::path dir(o.out);
-  std::filesystem::create_directories(dir);
   const std::string L(unitTag(Dimension::Length, sys));
   const std::string F(unitTag(Dimension::Feed, sys));
   const std::string V(unitTag(Dimension::Volume, sys));
@@ -509,6 +511,7 @@ SimulateOutcome runSimulateJob(const SimulateOptions& o) {
   outcome.units = sys;
   outcome.cutter = cutter;
   outcome.report = report;
+  outputs.keep();
   return outcome;
 }
 
