@@ -387,6 +387,9 @@ int runBatch(const BatchOptions& o) {
   const UnitSystem sys = unitsOf(o.units);
   if (o.workers < 0) throw ParameterError("--workers must not be negative");
   const fs::path out(o.out), jobs = out / "jobs";
+  // Checked before any job runs; kept whatever happens next: a batch resumes from what its
+  // jobs left.
+  OutputDirectory(out).keep();
   fs::create_directories(jobs);
 
   // This shard's jobs: every N-th of the manifest, starting at i. Those with a record for
