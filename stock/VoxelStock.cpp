@@ -370,7 +370,8 @@ bool storedMaterial(const LeafPlanes& planes, openvdb::Index offset, double befo
 /// made the voxel's plane, took nothing where each step's rim, behind a descending flat end
 /// mill, dips below the last step's floor across a corner of the voxel: a ramp's floor kept
 /// 0.03 of a voxel too much, its worst step 0.57 % off for some placements on the grid at
-/// D / h = 20, now 0.37 %.) The voxel keeps the plane normal to the centre's gradient `n`
+/// D / h = 20, now 0.37 %; 3 x 3 x 3 sub-cubes would make a helix's steps 1.8 times as fast
+/// but leave that ramp 0.62 % off.) The voxel keeps the plane normal to the centre's gradient `n`
 /// that leaves its share, and the old plane that goes with it best. Out of line: its
 /// sub-cubes' planes would weigh on the common path's frame.
 [[gnu::noinline]] double rimRemaining(const Sweep& sweep, const Eigen::Vector3d& p, double h,
