@@ -176,6 +176,11 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
     flatHeight = false;  // polylines always sample (arcs in other planes, splines)
   }
   flat_ = flatHeight;
+  if (path_.kind == StepPath::Kind::ArcXY) {
+    arcRadius_ = std::hypot(path_.start.x() - path_.center.x(), path_.start.y() - path_.center.y());
+    arcStartRad_ =
+        std::atan2(path_.start.y() - path_.center.y(), path_.start.x() - path_.center.x());
+  }
   band_ = resolution;  // beyond one voxel from the surface only the sign matters
   vertical_ = path_.kind == StepPath::Kind::Line &&
               (path_.end.head<2>() - path_.start.head<2>()).norm() <= tol::kLengthMm;
@@ -219,6 +224,9 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
     samples_.resize(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i)
       samples_[static_cast<std::size_t>(i)] = static_cast<double>(i) / (n - 1);
+    sampleTips_.reserve(samples_.size());
+    for (const double u : samples_)
+      sampleTips_.push_back(tip(u));
   }
 }
 
@@ -296,7 +304,7 @@ double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient
                                 f({0, 0, e}) - f({0, 0, -e})) /
                 (2.0 * e);
   } else if (gradient) {
-    const Eigen::Vector3d q = p - path_.at(best);
+    const Eigen::Vector3d q = p - tip(best);
     auto f = [&](const Eigen::Vector3d& o) { return cutter_.signedDistance(q + o); };
     *gradient = Eigen::Vector3d(f({e, 0, 0}) - f({-e, 0, 0}), f({0, e, 0}) - f({0, -e, 0}),
                                 f({0, 0, e}) - f({0, 0, -e})) /
@@ -321,19 +329,30 @@ double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient
     if (path_.kind == StepPath::Kind::ArcXY && n.head<2>().squaredNorm() > 0.0) {
       // A helix: as the XY arc it turns along (its rise adds a slope of pitch / circumference
       // to the motion, a small change of the envelope's curvature).
-      *curvature = alongPathCurvature(p - d * n, path_.at(best).z(), n,
+      *curvature = alongPathCurvature(p - d * n, tip(best).z(), n,
                                       Eigen::Vector2d(n.head<2>().normalized()));
       return d;
     }
     *curvature =
         tangentCurvature([&](const Eigen::Vector3d& x) { return cutter_.signedDistance(x); },
-                         Eigen::Vector3d(p - path_.at(best) - d * n), n, ek);
+                         Eigen::Vector3d(p - tip(best) - d * n), n, ek);
     if (best > 0.0 && best < 1.0) {
       const double du = std::min({1e-3, best, 1.0 - best});
-      *curvature = envelopeCurvature(*curvature, n, path_.at(best + du) - path_.at(best - du));
+      *curvature = envelopeCurvature(*curvature, n, tip(best + du) - tip(best - du));
     }
   }
   return d;
+}
+
+Eigen::Vector3d Sweep::tip(double u) const {
+  if (path_.kind != StepPath::Kind::ArcXY) return path_.at(u);
+  // StepPath::at with the arc's radius and start angle kept (their hypot and atan2 were
+  // half of a helix step's instructions); the same arithmetic, the same values.
+  u = std::clamp(u, 0.0, 1.0);
+  if (u >= 1.0) return path_.end;
+  const double a = arcStartRad_ + u * path_.sweepRad;
+  return {path_.center.x() + arcRadius_ * std::cos(a), path_.center.y() + arcRadius_ * std::sin(a),
+          path_.start.z() + u * (path_.end.z() - path_.start.z())};
 }
 
 double Sweep::flatRho(const Eigen::Vector3d& p, Eigen::Vector2d* gradient, double* bend) const {
@@ -442,7 +461,7 @@ double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3
     // an edge that one plane cannot follow; say so (count 0) and let the caller sample.
     double best = 1.0;
     sampled(p, best);
-    const Eigen::Vector3d q = p - path_.at(best);
+    const Eigen::Vector3d q = p - tip(best);
     const Eigen::Vector2d at(q.head<2>().norm(), q.z());
     for (const ProfileCorner& c : cutter_.corners())
       if (c.at.y() < 0.5 * cutter_.height() && (at - c.at).norm() < radius) count = 0;
@@ -452,7 +471,7 @@ double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3
 }
 
 double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter) const {
-  auto f = [&](double u) { return cutter_.signedDistance(p - path_.at(u)); };
+  auto f = [&](double u) { return cutter_.signedDistance(p - tip(u)); };
   // The best of the candidates (value, parameter) seen so far.
   double bestValue = 0.0;
   bool any = false;
@@ -499,7 +518,7 @@ double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter) const {
   }
   std::size_t best = 0;
   for (std::size_t i = 0; i < samples_.size(); ++i) {
-    const double v = f(samples_[i]);
+    const double v = cutter_.signedDistance(p - sampleTips_[i]);
     if (!any || v < bestValue) best = i;
     consider(samples_[i], v);
   }

@@ -102,6 +102,9 @@ class Sweep {
   /// XY direction away from the path where the foot is on it.
   Eigen::Matrix3d alongPathCurvature(const Eigen::Vector3d& foot, double tipZ,
                                      const Eigen::Vector3d& n, const Eigen::Vector2d& radial) const;
+  /// The tip position at parameter u (StepPath::at, with an arc's radius and start angle
+  /// computed once).
+  Eigen::Vector3d tip(double u) const;
   /// Closed-form distance of a step that keeps its height.
   double flatDistance(const Eigen::Vector3d& p) const;
 
@@ -114,9 +117,12 @@ class Sweep {
   bool vertical_ = false;        ///< a plunge or retract (no horizontal motion)
   double band_ = 0.0;            ///< distances beyond this only need their sign, mm
   double resolution_ = 0.0;      ///< mm
+  double arcRadius_ = 0.0;       ///< ArcXY: the tip's distance from the centre in XY, mm
+  double arcStartRad_ = 0.0;     ///< ArcXY: the start's angle about the centre, radians
   double zLow_ = 0.0;            ///< lowest tip height over the step, mm
   double zHigh_ = 0.0;           ///< highest point of the cutter over the step, mm
   std::vector<double> samples_;  ///< sample parameters for steps that change height
+  std::vector<Eigen::Vector3d> sampleTips_;  ///< tip(samples_[i])
   Box3 bounds_;
 };
 
