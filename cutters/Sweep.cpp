@@ -232,6 +232,12 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
 
 double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
                              Eigen::Matrix3d* curvature) const {
+  return distance(p, gradient, curvature, nullptr);
+}
+
+double Sweep::distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
+                       Eigen::Matrix3d* curvature, double* closest) const {
+  if (closest) *closest = std::numeric_limits<double>::quiet_NaN();
   const double e = resolution_ / 8.0;
   const double ek = resolution_ / 4.0;  // spacing of the curvature's second differences
   if (curvature) curvature->setZero();
@@ -292,6 +298,7 @@ double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient
   if (bound > band_) return bound;
   double best = 1.0;
   const double d = sampled(p, best);
+  if (closest) *closest = best;
   if (gradient && vertical_) {
     // A plunge or a retract reaches its minimum over a whole range of tip heights beside the
     // tool; the cutter's gradient at one of them may be its corner's. Differentiate the
@@ -450,7 +457,8 @@ double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3
     }
   }
   count = 1;
-  const double d = signedDistance(p, &normals[0], curvature);
+  double best = std::numeric_limits<double>::quiet_NaN();
+  const double d = distance(p, &normals[0], curvature, &best);
   distances[0] = d;
   const auto& corners = cutter_.corners();
   const bool lowerCorner = std::any_of(corners.begin(), corners.end(), [&](const ProfileCorner& c) {
@@ -459,8 +467,7 @@ double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3
   if (!flat_ && !vertical_ && std::abs(d) < radius && lowerCorner) {
     // A step that changes height: near the rim of the closest instance the swept solid has
     // an edge that one plane cannot follow; say so (count 0) and let the caller sample.
-    double best = 1.0;
-    sampled(p, best);
+    if (std::isnan(best)) sampled(p, best);  // (the distance was a bound)
     const Eigen::Vector3d q = p - tip(best);
     const Eigen::Vector2d at(q.head<2>().norm(), q.z());
     for (const ProfileCorner& c : cutter_.corners())

@@ -90,6 +90,10 @@ class Sweep {
   const AptCutter& cutter() const { return cutter_; }
 
  private:
+  /// signedDistance, and where it searched along the step (not a closed form or a bound) the
+  /// parameter of the closest tool position in `closest` (NaN otherwise).
+  double distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* curvature,
+                  double* closest) const;
   /// Minimum over the step of the cutter's distance; the minimising parameter in `best`.
   double sampled(const Eigen::Vector3d& p, double& best) const;
   /// XY distance from p to a height-keeping step's path, with its gradient (unit, or zero
