@@ -104,6 +104,14 @@ Eigen::Matrix3d envelopeCurvature(const Eigen::Matrix3d& K, const Eigen::Vector3
   return across * b * b.transpose();
 }
 
+/// The tip on the XY arc of `s` (radius r about its centre, start angle a0, radians) at
+/// parameter u in [0, 1), its height linear in u.
+Eigen::Vector3d onArc(const StepPath& s, double r, double a0, double u) {
+  const double a = a0 + u * s.sweepRad;
+  return {s.center.x() + r * std::cos(a), s.center.y() + r * std::sin(a),
+          s.start.z() + u * (s.end.z() - s.start.z())};
+}
+
 }  // namespace
 
 Eigen::Vector3d StepPath::at(double u) const {
@@ -111,13 +119,10 @@ Eigen::Vector3d StepPath::at(double u) const {
   switch (kind) {
     case Kind::Line:
       return start + u * (end - start);
-    case Kind::ArcXY: {
+    case Kind::ArcXY:
       if (u >= 1.0) return end;
-      const double r = std::hypot(start.x() - center.x(), start.y() - center.y());
-      const double a = std::atan2(start.y() - center.y(), start.x() - center.x()) + u * sweepRad;
-      return {center.x() + r * std::cos(a), center.y() + r * std::sin(a),
-              start.z() + u * (end.z() - start.z())};
-    }
+      return onArc(*this, std::hypot(start.x() - center.x(), start.y() - center.y()),
+                   std::atan2(start.y() - center.y(), start.x() - center.x()), u);
     case Kind::Polyline: {
       double total = 0.0;
       for (std::size_t i = 1; i < points.size(); ++i)
@@ -357,9 +362,7 @@ Eigen::Vector3d Sweep::tip(double u) const {
   // half of a helix step's instructions); the same arithmetic, the same values.
   u = std::clamp(u, 0.0, 1.0);
   if (u >= 1.0) return path_.end;
-  const double a = arcStartRad_ + u * path_.sweepRad;
-  return {path_.center.x() + arcRadius_ * std::cos(a), path_.center.y() + arcRadius_ * std::sin(a),
-          path_.start.z() + u * (path_.end.z() - path_.start.z())};
+  return onArc(path_, arcRadius_, arcStartRad_, u);
 }
 
 double Sweep::flatRho(const Eigen::Vector3d& p, Eigen::Vector2d* gradient, double* bend) const {
