@@ -160,17 +160,16 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
   double length = (path_.end - path_.start).norm();
   bool flatHeight = std::abs(path_.end.z() - path_.start.z()) <= kFlatZ;
   if (path_.kind == StepPath::Kind::ArcXY) {
-    const double r =
-        std::hypot(path_.start.x() - path_.center.x(), path_.start.y() - path_.center.y());
-    const double a0 =
+    arcRadius_ = std::hypot(path_.start.x() - path_.center.x(), path_.start.y() - path_.center.y());
+    arcStartRad_ =
         std::atan2(path_.start.y() - path_.center.y(), path_.start.x() - path_.center.x());
     for (int k = 0; k < 4; ++k) {
       const double a = k * kPi / 2.0;
-      if (withinSweep(a, a0, path_.sweepRad))
-        extremes.emplace_back(path_.center.x() + r * std::cos(a),
-                              path_.center.y() + r * std::sin(a), path_.start.z());
+      if (withinSweep(a, arcStartRad_, path_.sweepRad))
+        extremes.emplace_back(path_.center.x() + arcRadius_ * std::cos(a),
+                              path_.center.y() + arcRadius_ * std::sin(a), path_.start.z());
     }
-    length = std::hypot(r * std::abs(path_.sweepRad), path_.end.z() - path_.start.z());
+    length = std::hypot(arcRadius_ * std::abs(path_.sweepRad), path_.end.z() - path_.start.z());
   } else if (path_.kind == StepPath::Kind::Polyline) {
     extremes.insert(extremes.end(), path_.points.begin(), path_.points.end());
     length = 0.0;
@@ -181,11 +180,10 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
     flatHeight = false;  // polylines always sample (arcs in other planes, splines)
   }
   flat_ = flatHeight;
-  if (path_.kind == StepPath::Kind::ArcXY) {
-    arcRadius_ = std::hypot(path_.start.x() - path_.center.x(), path_.start.y() - path_.center.y());
-    arcStartRad_ =
-        std::atan2(path_.start.y() - path_.center.y(), path_.start.x() - path_.center.x());
-  }
+  const auto& corners = cutter_.corners();
+  lowerCorner_ = std::any_of(corners.begin(), corners.end(), [&](const ProfileCorner& c) {
+    return c.at.y() < 0.5 * cutter_.height();
+  });
   band_ = resolution;  // beyond one voxel from the surface only the sign matters
   vertical_ = path_.kind == StepPath::Kind::Line &&
               (path_.end.head<2>() - path_.start.head<2>()).norm() <= tol::kLengthMm;
@@ -377,9 +375,10 @@ double Sweep::flatRho(const Eigen::Vector3d& p, Eigen::Vector2d* gradient, doubl
     if (from == s0 || from == s1) curve = rho > 0.0 ? 1.0 / rho : 0.0;  // about an end
   } else {
     const Eigen::Vector2d c = path_.center.head<2>();
-    const double r = (path_.start.head<2>() - c).norm();
+    // (The radius as the XY norm, not arcRadius_'s hypot: they differ in the last bit, and
+    // that moves a volume in the sixth digit.)
+    const double r = (path_.start.head<2>() - c).norm(), a0 = arcStartRad_;
     const Eigen::Vector2d v = q - c;
-    const double a0 = std::atan2(path_.start.y() - c.y(), path_.start.x() - c.x());
     if (v.norm() <= tol::kLengthMm) {
       rho = r;  // the centre: every arc point is r away
       from = q;
@@ -463,11 +462,7 @@ double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3
   double best = std::numeric_limits<double>::quiet_NaN();
   const double d = distance(p, &normals[0], curvature, &best);
   distances[0] = d;
-  const auto& corners = cutter_.corners();
-  const bool lowerCorner = std::any_of(corners.begin(), corners.end(), [&](const ProfileCorner& c) {
-    return c.at.y() < 0.5 * cutter_.height();
-  });
-  if (!flat_ && !vertical_ && std::abs(d) < radius && lowerCorner) {
+  if (!flat_ && !vertical_ && std::abs(d) < radius && lowerCorner_) {
     // A step that changes height: near the rim of the closest instance the swept solid has
     // an edge that one plane cannot follow; say so (count 0) and let the caller sample.
     if (std::isnan(best)) sampled(p, best);  // (the distance was a bound)

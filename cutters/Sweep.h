@@ -119,6 +119,7 @@ class Sweep {
   bool capsuleLine_ = false;     ///< a straight step of a ball end mill: closed form
   Parallelogram capsule_;        ///< capsuleLine_: the ball centre's path, up to h - r
   bool vertical_ = false;        ///< a plunge or retract (no horizontal motion)
+  bool lowerCorner_ = false;     ///< the profile has a sharp corner in its lower half (a rim)
   double band_ = 0.0;            ///< distances beyond this only need their sign, mm
   double resolution_ = 0.0;      ///< mm
   double arcRadius_ = 0.0;       ///< ArcXY: the tip's distance from the centre in XY, mm
