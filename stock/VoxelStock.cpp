@@ -339,6 +339,14 @@ double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   return before * std::max(0.0, left) / held;
 }
 
+/// The half-space {x : n . (x - p) + distance <= 0} of Sweep::localFaces (world units about
+/// the voxel's centre p) in the voxel's unit-cube coordinates (voxel size h); a zero normal
+/// stays zero.
+HalfSpace voxelPlane(const Eigen::Vector3d& n, double distance, double h) {
+  const double norm = n.norm();
+  return HalfSpace{norm > 0.0 ? Eigen::Vector3d(n / norm) : Eigen::Vector3d::Zero(), -distance / h};
+}
+
 /// A partial voxel's material as its planes tell: inside both planes q (or with `united`
 /// inside either), which hold the share `held` of the cube (NaN until clipped).
 struct StoredMaterial {
@@ -397,9 +405,7 @@ bool storedMaterial(const LeafPlanes& planes, openvdb::Index offset, double befo
   }
   if (cutShare <= kNoise) return before;
   if (cutShare >= 1.0 - kNoise) return 0.0;
-  const double norm = n.norm();
-  const HalfSpace centrePlane{norm > 0.0 ? Eigen::Vector3d(n / norm) : Eigen::Vector3d::Zero(),
-                              -d / h};
+  const HalfSpace centrePlane = voxelPlane(n, d, h);
   std::optional<HalfSpace> keptPlane;
   auto kept = [&]() -> const HalfSpace& {
     if (!keptPlane) keptPlane = planeLeaving(-centrePlane.n, 1.0 - cutShare);
@@ -470,11 +476,8 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   if (d <= -kHalfDiagonal * h) return 0.0;
   HalfSpace cut[2];  // the swept solid in the voxel: inside both (the second may keep all)
   if (faces == 0) return rimRemaining(sweep, p, h, before, planes, offset, serial, box, n[0], d);
-  for (int j = 0; j < faces; ++j) {
-    const double norm = n[j].norm();
-    cut[j] = HalfSpace{norm > 0.0 ? Eigen::Vector3d(n[j] / norm) : Eigen::Vector3d::Zero(),
-                       -dist[j] / h};
-  }
+  for (int j = 0; j < faces; ++j)
+    cut[j] = voxelPlane(n[j], dist[j], h);
   if (faces == 1 && cut[0].n.squaredNorm() > 0.0 && !curvature.isZero()) {
     // A curved surface leaves its tangent plane by the sagitta u^T K u / 2 (K its curvature,
     // Sweep::signedDistance): the plane moved by the sagitta's mean over its section of the
