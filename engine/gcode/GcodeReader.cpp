@@ -1,6 +1,7 @@
 #include "engine/gcode/GcodeReader.h"
 
 #include "engine/gcode/GcodeError.h"
+#include "engine/gcode/LatheCycle.h"
 #include "engine/gcode/LineParser.h"
 #include "engine/gcode/Spline.h"
 
@@ -161,6 +162,11 @@ int gGroup(int g) {
     default:
       return -1;
   }
+}
+
+/// G70, G71, G71.1, G71.2, G72, G72.1, G72.2 (x10).
+bool isLatheCycle(int g) {
+  return g == 700 || (g >= 710 && g <= 712) || (g >= 720 && g <= 722);
 }
 
 int mGroup(int m) {
@@ -334,6 +340,11 @@ class Interpreter final : public gcode::ParameterSource {
   }
 
  private:
+  /// A lathe cycle's profile being read: its last point (program units) and segments.
+  struct LatheProfile {
+    double x, z;
+    std::vector<gcode::LatheSegment> segments;
+  };
   struct Frame {
     int file;
     int returnLine;
@@ -397,7 +408,9 @@ class Interpreter final : public gcode::ParameterSource {
   }
 
   // ---------------------------------------------------------------- the run loop
-  void execute() {
+  /// Runs lines from line_ on. With `returnDepth` > 0 it runs a call whose frame is at that
+  /// depth and returns when the call does.
+  void execute(std::size_t returnDepth = 0) {
     bool seenContent = false;
     bool percentMode = false;
     long long executed = 0;
@@ -439,6 +452,14 @@ class Interpreter final : public gcode::ParameterSource {
       }
       if (block.hasOWord) {
         controlFlow(block);
+        if (frames_.size() < returnDepth) return;
+        continue;
+      }
+      if (profile_) {
+        profileBlock(block);
+        for (const gcode::Assignment& a : block.assignments)
+          assign(a);
+        ++line_;
         continue;
       }
       const bool end = executeBlock(block);
@@ -626,13 +647,14 @@ class Interpreter final : public gcode::ParameterSource {
     }
   }
 
-  void call(const gcode::OWord& o) {
-    // Find the subroutine: this file, the main file, then <name>.ngc on the search path.
+  /// The file and line of subroutine `label`'s O-sub: in this file, the main file, files
+  /// already read, then <name>.ngc beside the main file or on the search path.
+  std::pair<int, int> findSubroutine(const std::string& label, int column) {
     int targetFile = -1;
     int targetLine = -1;
     auto findIn = [&](int fi) {
       const SourceFile& f = *files_[static_cast<std::size_t>(fi)];
-      const auto it = f.labels.find(o.label);
+      const auto it = f.labels.find(label);
       if (it == f.labels.end()) return false;
       for (const auto& [line, kw] : it->second)
         if (kw == "sub") {
@@ -645,8 +667,8 @@ class Interpreter final : public gcode::ParameterSource {
     if (!findIn(file_) && !findIn(0)) {
       for (int fi = 1; fi < static_cast<int>(files_.size()) && targetFile < 0; ++fi)
         findIn(fi);
-      if (targetFile < 0 && o.label.size() > 2 && o.label.front() == '<') {
-        const std::string name = o.label.substr(1, o.label.size() - 2) + ".ngc";
+      if (targetFile < 0 && label.size() > 2 && label.front() == '<') {
+        const std::string name = label.substr(1, label.size() - 2) + ".ngc";
         std::vector<std::string> folders{files_[0]->folder};
         folders.insert(folders.end(), options_.subroutinePath.begin(),
                        options_.subroutinePath.end());
@@ -664,10 +686,14 @@ class Interpreter final : public gcode::ParameterSource {
       }
     }
     if (targetFile < 0)
-      fail(o.column,
-           "expected a subroutine o" + o.label + " (in this program or as " +
-               (o.label.front() == '<' ? o.label.substr(1, o.label.size() - 2) : o.label) +
-               ".ngc beside it), found none");
+      fail(column, "expected a subroutine o" + label + " (in this program or as " +
+                       (label.front() == '<' ? label.substr(1, label.size() - 2) : label) +
+                       ".ngc beside it), found none");
+    return {targetFile, targetLine};
+  }
+
+  void call(const gcode::OWord& o) {
+    const auto [targetFile, targetLine] = findSubroutine(o.label, o.column);
     if (frames_.size() >= 64)
       fail(o.column, "expected subroutine calls nested at most 64 deep, found deeper recursion");
     Frame f;
@@ -789,15 +815,6 @@ class Interpreter final : public gcode::ParameterSource {
           fail(column,
                "expected a milling motion, found G76 (the lathe threading cycle is not "
                "interpreted)");
-        case 700:
-        case 710:
-        case 711:
-        case 712:
-        case 720:
-        case 721:
-        case 722:
-          fail(column, "expected a milling motion, found " + codeName('G', code) +
-                           " (lathe turning cycles G70-G72 are not interpreted)");
         case 860:
         case 870:
         case 880:
@@ -892,10 +909,13 @@ class Interpreter final : public gcode::ParameterSource {
         if (gGroup(code) == 0 && code != 40 && code != 530) return code;
       return std::nullopt;
     }();
+    const std::optional<int> motionWord = w.gIn(1);
+    const bool latheCycleLine = motionWord && isLatheCycle(*motionWord);
+    // U and W of a lathe cycle shift its profile; they are not axes there.
+    if (latheCycleLine) w.otherAxes = w.has('A') || w.has('B') || w.has('C') || w.has('V');
     const bool axes =
         w.has('X') || w.has('Y') || w.has('Z') || w.has('@') || w.has('^') || w.otherAxes;
     otherAxes_ = w.otherAxes;
-    const std::optional<int> motionWord = w.gIn(1);
     if (g0 && motionWord && axes && (*g0 == 100 || *g0 == 280 || *g0 == 300 || *g0 == 920))
       fail(w.gColumn(*g0), "expected either " + codeName('G', *g0) +
                                " or a motion on this line, found both using the axis words");
@@ -915,7 +935,7 @@ class Interpreter final : public gcode::ParameterSource {
     if (motionWord && *motionWord == 800) {
       if (axesForMotion) fail(w.gColumn(800), "expected no axis words with G80, found some");
       cycleActive_ = false;
-    } else if (axesForMotion ||
+    } else if (axesForMotion || latheCycleLine ||
                (motionWord && (*motionWord == 20 || *motionWord == 30 || *motionWord == 53))) {
       if (motion_ < 0 || motion_ == 800)
         fail(w.column(w.has('X')   ? 'X'
@@ -1087,6 +1107,9 @@ class Interpreter final : public gcode::ParameterSource {
   }
 
   Move base(MoveKind kind) const {
+    if (out_.moves.size() >= options_.maxMoves)
+      fail(1, "expected at most " + std::to_string(options_.maxMoves) +
+                  " moves in a program, found more");
     Move m;
     m.kind = kind;
     m.start = pos_;
@@ -1201,6 +1224,10 @@ class Interpreter final : public gcode::ParameterSource {
         probe(w, column);
         return;
       default:
+        if (isLatheCycle(motion_)) {
+          latheCycle(w, column);
+          return;
+        }
         fail(column, "expected a supported motion, found " + codeName('G', motion_));
     }
   }
@@ -1225,6 +1252,163 @@ class Interpreter final : public gcode::ParameterSource {
       emitLinear(MoveKind::Line, start, feed);
       out_.moves.back().feedSource = FeedSource::Spindle;
     }
+  }
+
+  /// G70-G72, LinuxCNC's lathe cycles. As LinuxCNC does, the profile subroutine Q is read
+  /// line by line, not executed: each line's X, Z, I, K, R and motion word (expressions
+  /// evaluated against the state at the cycle's line, in a fresh call frame), up to the first
+  /// O-endsub; control lines inside it are passed over. The cycle's moves (LatheCycle.h) then
+  /// run as G0/G1/G2/G3 blocks of the cycle's line, with absolute arc centres.
+  void latheCycle(const Words& w, int column) {
+    const std::string name = codeName('G', motion_);
+    if (!w.has('Q'))
+      fail(column,
+           "expected a Q word (the profile's subroutine number) with " + name + ", found none");
+    if (incremental_)
+      fail(column, "expected absolute distance mode (G90) for " + name + ", found G91");
+    if (plane_ != Plane::XZ)
+      fail(column, "expected the XZ plane (G18) for " + name + ", found the " + planeName(plane_) +
+                       " plane");
+    gcode::LatheCycle cycle;
+    cycle.code = motion_ / 10;
+    cycle.variant = motion_ % 10;
+    const Vector3d here = programPosition();
+    cycle.start = {w.has('Z') ? w.get('Z') : here.z(), w.has('X') ? w.get('X') : here.x()};
+    const auto word = [&](char c, double& v) {
+      if (w.has(c)) v = w.get(c);
+    };
+    word('D', cycle.d);
+    word('E', cycle.e);
+    word('P', cycle.passes);
+    word('I', cycle.depth);
+    word('R', cycle.retract);
+    word('U', cycle.u);
+    word('W', cycle.w);
+    // The rapid to the start point comes first, then the profile is read.
+    const Vector3d startPoint = target(w, false);
+    if ((startPoint - pos_).cwiseAbs().maxCoeff() > 1e-9) emitLinear(MoveKind::Rapid, startPoint);
+    const std::vector<gcode::LatheSegment> profile =
+        readLatheProfile(std::to_string(std::lround(w.get('Q'))), w.column('Q'), cycle.start);
+
+    std::vector<gcode::LatheMove> moves;
+    try {
+      moves = gcode::latheCycleMoves(profile, cycle);
+    } catch (const gcode::LatheCycleError& e) {
+      fail(column, std::string(e.what()) + " in " + name);
+    }
+    const bool arcIncremental = arcIncremental_;
+    arcIncremental_ = false;
+    for (const gcode::LatheMove& m : moves) {
+      Words step;
+      step.v[slot('X')] = m.end.imag();
+      step.v[slot('Z')] = m.end.real();
+      if (m.kind == gcode::LatheMoveKind::Arc) {
+        step.v[slot('I')] = m.centre.imag();
+        step.v[slot('K')] = m.centre.real();
+        motion_ = m.ccw ? 30 : 20;
+        arc(step, column);
+      } else {
+        motion_ = m.kind == gcode::LatheMoveKind::Rapid ? 0 : 10;
+        const Vector3d end = target(step, false);
+        if ((end - pos_).cwiseAbs().maxCoeff() <= 1e-9) continue;  // LinuxCNC's zero moves
+        if (motion_ == 0)
+          emitLinear(MoveKind::Rapid, end);
+        else
+          emitLinear(MoveKind::Line, end, feedFor((end - pos_).norm(), step, column));
+      }
+    }
+    arcIncremental_ = arcIncremental;
+  }
+
+  /// The profile of a lathe cycle from `start` (program units): subroutine `label` called
+  /// and run as LinuxCNC does, its control lines and parameter assignments executed, its
+  /// motion lines read into segments instead of moving (the position that #<_x>, #<_z> and
+  /// #5420-#5422 report follows the profile's points meanwhile).
+  std::vector<gcode::LatheSegment> readLatheProfile(const std::string& label, int column,
+                                                    gcode::LathePoint start) {
+    const int callerLine = line_;
+    const Vector3d machinePosition = pos_;
+    profile_ = LatheProfile{start.imag(), start.real(), {}};
+    gcode::OWord o;
+    o.label = label;
+    o.keyword = "call";
+    o.column = column;
+    call(o);
+    execute(frames_.size());
+    std::vector<gcode::LatheSegment> segments = std::move(profile_->segments);
+    profile_.reset();
+    pos_ = machinePosition;
+    line_ = callerLine;
+    return segments;
+  }
+
+  /// One motion line of a lathe profile: a segment from the last point to its X and Z (or
+  /// the last point moved by U and W), with a corner finish after it for an A (fillet) or
+  /// C (chamfer) word.
+  void profileBlock(const Block& b) {
+    if (b.words.empty()) return;
+    Words pw = collect(b);
+    LatheProfile& p = *profile_;
+    const gcode::LathePoint start{p.z, p.x};
+    gcode::LathePoint end = start;
+    for (const auto& [absolute, relative] : {std::pair{'X', 'U'}, std::pair{'Z', 'W'}}) {
+      if (pw.has(relative) && pw.has(absolute))
+        fail(pw.column(relative), std::string("expected either ") + absolute + " or " + relative +
+                                      " on a line of a lathe profile, found both");
+    }
+    if (pw.has('U')) end.imag(end.imag() + pw.get('U') / (diameterMode_ ? 2.0 : 1.0));
+    if (pw.has('X')) end.imag(pw.get('X') / (diameterMode_ ? 2.0 : 1.0));
+    if (pw.has('W')) end.real(end.real() + pw.get('W'));
+    if (pw.has('Z')) end.real(pw.get('Z'));
+    gcode::LathePoint centre{pw.has('K') ? pw.get('K') : 0.0, pw.has('I') ? pw.get('I') : 0.0};
+    if (const std::optional<int> g = pw.gIn(1)) motion_ = *g;  // they stay in effect
+    if (end == start) return;
+    gcode::LatheSegment s;
+    s.start = start;
+    s.end = end;
+    if (motion_ == 20 || motion_ == 30) {
+      if (pw.has('R')) {
+        if (pw.has('I') || pw.has('K'))
+          fail(pw.column('R'), "expected either R or I/K for an arc, found both");
+        // The centre on the side G2/G3 and the sign of R put it.
+        const double r = pw.get('R');
+        const gcode::LathePoint chord = end - start;
+        const double h2 = (r * r - std::norm(chord) / 4) / std::norm(chord);
+        if (h2 < -1e-9)
+          fail(pw.column('R'), "expected an arc radius that reaches the end point (at least " +
+                                   length(std::abs(chord) / 2.0) + "), found R" + num(r));
+        const gcode::LathePoint d =
+            gcode::LathePoint(0.0, 1.0) * std::sqrt(std::max(h2, 0.0)) * chord;
+        centre = (start + end) / 2.0 + (motion_ == 30 ? d : -d);
+      } else {
+        if (!pw.has('I') && !pw.has('K'))
+          fail(1, "expected I or K (or R) for an arc of the lathe profile, found neither");
+        if (arcIncremental_) centre += start;
+      }
+      s.arc = true;
+      s.ccw = motion_ == 30;
+      s.centre = centre;
+    }
+    if (motion_ != 0 && motion_ != 10 && motion_ != 20 && motion_ != 30) {
+      // (as LinuxCNC) other motions add nothing; the next segment starts at their end
+    } else {
+      p.segments.push_back(s);
+      if (pw.has('A') && pw.has('C'))
+        fail(pw.column('C'),
+             "expected either A (fillet) or C (chamfer) at a profile corner, "
+             "found both");
+      if (pw.has('A') || pw.has('C')) {
+        gcode::LatheSegment corner;
+        corner.arc = pw.has('A');
+        corner.start = corner.end = corner.centre = end;
+        corner.corner = pw.get(corner.arc ? 'A' : 'C');
+        p.segments.push_back(corner);
+      }
+    }
+    p.x = end.imag();
+    p.z = end.real();
+    const Vector3d program = programPosition();
+    pos_ = toMachine(Vector3d(p.x, program.y(), p.z));
   }
 
   /// G38.2-G38.5. Without a part to touch, the probe runs to its target and, as LinuxCNC's
@@ -1584,6 +1768,7 @@ class Interpreter final : public gcode::ParameterSource {
   std::unordered_map<std::string, double> topLocals_;
   std::map<int, double> toolLengths_;  ///< mm
   std::optional<Modal> saved_;
+  std::optional<LatheProfile> profile_;
 
   Vector3d pos_{0.0, 0.0, 0.0};
   Plane plane_ = Plane::XY;

@@ -25,6 +25,7 @@
 #include "cutters/Error.h"
 #include "engine/gcode/Toolpath.h"
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,9 @@ struct ReaderOptions {
   std::vector<std::string> subroutinePath;
   /// Safety limit on executed lines (loops that never end): a GcodeError beyond it.
   long long maxExecutedLines = 50'000'000;
+  /// Safety limit on moves (a lathe cycle with a tiny depth of cut in a loop): a GcodeError
+  /// beyond it.
+  std::size_t maxMoves = 100'000'000;
 };
 
 /// Read and interpret a program file. Throws GcodeError ("file:line:col: expected ..., found

@@ -16,6 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string text(reinterpret_cast<const char*>(data), size);
   engage::ReaderOptions options;
   options.maxExecutedLines = 20000;  // loops in fuzzed programs end quickly
+  options.maxMoves = 200000;         // and lathe cycles in them stay small
   try {
     (void)engage::readProgramText(text, "fuzz.ngc", options);
   } catch (const engage::Error&) {

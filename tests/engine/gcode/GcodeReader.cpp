@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -103,9 +104,9 @@ TEST_CASE("programs in the dialects users bring interpret as LinuxCNC's rs274 do
   ReaderOptions options;
   options.toolTable = data + "linuxcnc/tools.tbl";
   options.toolTableInch = true;  // rs274 without an INI file reads tool tables in inches
-  for (const char* name :
-       {"fusion360_pocket.nc", "freecad_profile.ngc", "grbl_engrave.gcode", "inch_helix.ngc",
-        "linuxcnc_features.ngc", "linuxcnc_probe_tap.ngc", "lathe_diameter_thread.ngc"}) {
+  for (const char* name : {"fusion360_pocket.nc", "freecad_profile.ngc", "grbl_engrave.gcode",
+                           "inch_helix.ngc", "linuxcnc_features.ngc", "linuxcnc_probe_tap.ngc",
+                           "lathe_diameter_thread.ngc", "lathe_turning_cycles.ngc"}) {
     INFO(name);
     const std::string stem = std::string(name).substr(0, std::string(name).find('.'));
     const auto expected = readGolden(golden + stem + ".csv");
@@ -122,6 +123,47 @@ TEST_CASE("programs in the dialects users bring interpret as LinuxCNC's rs274 do
       }
     }
   }
+}
+
+TEST_CASE("a lathe cycle reads its profile as LinuxCNC does", "[gcode][lathe]") {
+  // LinuxCNC runs the profile subroutine's control lines and assignments and tracks the
+  // profile's points in #<_x>, #<_z> (#5420-#5422) while it reads them.
+  const auto m = moves(
+      "G18 G21 F100\nG0 X20 Z5\no10 sub\nG1 X5 Z0\no11 repeat [2]\n"
+      "G1 X[#<_x> + 1] Z[#<_z> - 3]\no11 endrepeat\nG1 X12 Z-15\no10 endsub\n"
+      "G71 Q10 X14 Z2 D0 I1 R0.3\nX30\nM2\n");
+  checkPoint(m[0].end, 20, 0, 5);
+  checkPoint(m[1].end, 14, 0, 2);  // the rapid to the cycle's start point comes first
+  // By hand, the profile is (X5 Z0) (X6 Z-3) (X7 Z-6) (X12 Z-15): a pass at X ends on the last
+  // segment at Z = -6 - 1.8 (X - 7), or at Z-15 where X is above the profile.
+  std::map<int, double> passEnd;
+  for (std::size_t i = 1; i < m.size(); ++i)
+    if (m[i].kind == MoveKind::Line && m[i].line == 10 &&
+        std::abs(m[i].end.x() - m[i - 1].end.x()) < kExact)
+      passEnd.emplace(static_cast<int>(std::lround(m[i].end.x())), m[i].end.z());
+  REQUIRE(passEnd.size() >= 6);
+  CHECK(passEnd.at(14) == Approx(-15).margin(kExact));
+  CHECK(passEnd.at(12) == Approx(-15).margin(kExact));
+  CHECK(passEnd.at(11) == Approx(-6 - 1.8 * 4).margin(kExact));
+  CHECK(passEnd.at(9) == Approx(-6 - 1.8 * 2).margin(kExact));
+  // Afterwards the last cycle move's mode (G1) is in effect, at the cycle line's feed.
+  CHECK(m.back().kind == MoveKind::Line);
+  checkPoint(m.back().end, 30, 0, -15);
+  CHECK(m.back().feed == Approx(100));
+}
+
+TEST_CASE("lathe cycles in diameter mode: X words are diameters, I stays a radius",
+          "[gcode][lathe]") {
+  const auto m = moves(
+      "G18 G21 G7 F100\no1 sub\nG1 X10 Z0\nZ-10\nX20\no1 endsub\n"
+      "G71 Q1 X24 Z2 D0 I1 R0.5\nM2\n");
+  // By hand: radius 12 down to the profile at radius 5, passes 1 apart (radius), each to Z-10.
+  std::vector<double> passes;
+  for (std::size_t i = 1; i < m.size(); ++i)
+    if (m[i].kind == MoveKind::Line && std::abs(m[i].end.z() + 10) < kExact &&
+        std::abs(m[i].end.x() - m[i - 1].end.x()) < kExact)
+      passes.push_back(m[i].end.x());
+  CHECK(passes == std::vector<double>{12, 11, 10, 9, 8, 7, 6, 5});
 }
 
 TEST_CASE("probing, spindle-synchronised motion and lathe diameter mode", "[gcode]") {
@@ -389,12 +431,28 @@ TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]"
   CHECK_THAT(errorOf("S100 M3\nG33 Z-1\n"),
              Contains("2:1: expected a K word (distance per spindle revolution) with G33"));
   CHECK_THAT(errorOf("G33.1 Z-1 K1\n"), Contains("expected a spindle speed S > 0 for G33.1"));
-  CHECK_THAT(errorOf("G18 G70 Q100 X15 Z4 D1 P1\n"),
-             Contains("1:5: expected a milling motion, found G70 (lathe turning cycles"));
+  // Lathe cycles: the words they need, and a profile LinuxCNC cannot cut.
+  CHECK_THAT(errorOf("G18 G71 X10 Z2 D1\n"),
+             Contains("1:5: expected a Q word (the profile's subroutine number) with G71"));
+  CHECK_THAT(errorOf("G18 G70 Q100 X15 Z4 D1 P1\n"), Contains("1:9: expected a subroutine o100"));
+  CHECK_THAT(errorOf("G71 Q1 X10 Z2\n"), Contains("1:1: expected the XZ plane (G18) for G71"));
+  CHECK_THAT(errorOf("G18 G91 G72.1 Q1 X10 Z2\n"),
+             Contains("1:9: expected absolute distance mode (G90) for G72.1, found G91"));
+  const std::string profile = "o1 sub\nG1 X5 Z0\nZ-10\nX8 Z-8\nX10 Z-12\no1 endsub\n";
+  CHECK_THAT(errorOf("G18 F100\n" + profile + "G71 Q1 X10 Z2 I1\n"),
+             Contains("8:1: expected a profile that runs one way along the cut (no undercut)"));
+  CHECK_THAT(errorOf("G18 F100\n" + profile + "G71 Q1 X10 Z2 I0\n"),
+             Contains("8:1: expected a depth of cut I greater than zero, found I0"));
+  CHECK_THAT(errorOf("G18 F100\no1 sub\nG1 X5 Z0\nG2 X7 Z-2 R2 K1\no1 endsub\nG71 Q1 X9 Z2\n"),
+             Contains("4:11: expected either R or I/K for an arc, found both"));
   ReaderOptions limited;
   limited.maxExecutedLines = 1000;
   CHECK_THROWS_WITH(run("o1 while [1]\no1 endwhile\n", limited),
                     Contains("more than 1000 executed lines"));
+  ReaderOptions few;
+  few.maxMoves = 3;
+  CHECK_THROWS_WITH(run("G0 X1\nX2\nX3\nX4\n", few),
+                    Contains("4:1: expected at most 3 moves in a program, found more"));
   CHECK_THROWS_WITH(readProgram("no/such/program.ngc"),
                     Contains("cannot read program 'no/such/program.ngc'"));
 }

@@ -51,7 +51,8 @@ FeedPlan unchanged(const Toolpath& t) {
 }  // namespace
 
 TEST_CASE("an unchanged plan gives the program back byte for byte", "[gcode]") {
-  for (const char* name : {"fusion360_pocket.nc", "linuxcnc_features.ngc", "inch_helix.ngc"}) {
+  for (const char* name : {"fusion360_pocket.nc", "linuxcnc_features.ngc", "inch_helix.ngc",
+                           "lathe_turning_cycles.ngc"}) {
     std::ifstream in(std::string(ENGAGE_SOURCE_DIR "/data/gcode/dialects/") + name);
     std::stringstream s;
     s << in.rdbuf();
@@ -72,6 +73,39 @@ TEST_CASE("a new feed on one line, and the original F restored on the next", "[g
   CHECK(back.moves[2].feed == 500.0);
   CHECK(back.moves[3].feed == 500.0);
   CHECK(pathDistance(t, back) < 1e-6);
+}
+
+TEST_CASE("a lathe cycle takes one new feed on its line", "[gcode][lathe]") {
+  const std::string src =
+      "G18 G21 F100\no1 sub\nG1 X5 Z0\nZ-10\nX10\no1 endsub\n"
+      "G71 Q1 X10 Z2 I1 R0.3\nG1 X12\nM2\n";
+  const Toolpath t = read(src);
+  FeedPlan plan = unchanged(t);
+  std::size_t cycleFeeds = 0;
+  for (std::size_t i = 0; i < t.moves.size(); ++i)
+    if (t.moves[i].line == 7 && t.moves[i].kind != MoveKind::Rapid) {
+      plan[i] = {{1.0, 80.0}};
+      ++cycleFeeds;
+    }
+  REQUIRE(cycleFeeds > 5);
+  const std::string out = writeProgram(src, t, plan);
+  CHECK(out ==
+        "G18 G21 F100\no1 sub\nG1 X5 Z0\nZ-10\nX10\no1 endsub\n"
+        "G71 Q1 X10 Z2 I1 R0.3 F80\nG1 X12 F100\nM2\n");
+  const Toolpath back = read(out);
+  REQUIRE(back.moves.size() == t.moves.size());
+  for (std::size_t i = 0; i < back.moves.size(); ++i)
+    if (back.moves[i].kind != MoveKind::Rapid)
+      CHECK(back.moves[i].feed == (back.moves[i].line == 7 ? 80.0 : 100.0));
+  CHECK(pathDistance(t, back) < 1e-6);
+  // A plan that changes the feed within the cycle cannot be written on its one line.
+  for (std::size_t i = 0; i < t.moves.size(); ++i)
+    if (t.moves[i].line == 7 && t.moves[i].kind == MoveKind::Line) {
+      plan[i] = {{1.0, 60.0}};
+      break;
+    }
+  CHECK_THROWS_WITH(writeProgram(src, t, plan),
+                    Contains("a canned cycle or spline line takes one feed"));
 }
 
 TEST_CASE("splitting lines and helices where the feed changes", "[gcode]") {
