@@ -434,6 +434,7 @@ class Interpreter final : public gcode::ParameterSource {
         fail(e.column, e.message);
       }
       if (block.percent) {
+        if (returnDepth > 0) return;  // a '%' inside a subroutine run here ends the program
         if (file_ == 0 && !seenContent) {
           percentMode = true;
           seenContent = true;
@@ -1334,7 +1335,12 @@ class Interpreter final : public gcode::ParameterSource {
     o.keyword = "call";
     o.column = column;
     call(o);
-    execute(frames_.size());
+    const std::size_t depth = frames_.size();
+    execute(depth);
+    if (frames_.size() >= depth)  // it stopped inside the subroutine (a closing '%')
+      fail(1, "expected O-endsub closing the profile subroutine o" + label +
+                  ", found the end "
+                  "of the program");
     std::vector<gcode::LatheSegment> segments = std::move(profile_->segments);
     profile_.reset();
     pos_ = machinePosition;

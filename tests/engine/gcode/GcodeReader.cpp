@@ -443,6 +443,8 @@ TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]"
              Contains("8:1: expected a profile that runs one way along the cut (no undercut)"));
   CHECK_THAT(errorOf("G18 F100\n" + profile + "G71 Q1 X10 Z2 I0\n"),
              Contains("8:1: expected a depth of cut I greater than zero, found I0"));
+  CHECK_THAT(errorOf("%\nG18 F100\no1 sub\nG1 X5 Z0\n%\nZ-10\no1 endsub\nG71 Q1 X10 Z2\n%\n"),
+             Contains("5:1: expected O-endsub closing the profile subroutine o1, found the end"));
   CHECK_THAT(errorOf("G18 F100\no1 sub\nG1 X5 Z0\nG2 X7 Z-2 R2 K1\no1 endsub\nG71 Q1 X9 Z2\n"),
              Contains("4:11: expected either R or I/K for an arc, found both"));
   ReaderOptions limited;
