@@ -1307,7 +1307,16 @@ class Interpreter final : public gcode::ParameterSource {
         step.v[slot('I')] = m.centre.imag();
         step.v[slot('K')] = m.centre.real();
         motion_ = m.ccw ? 30 : 20;
-        arc(step, column);
+        try {
+          arc(step, column);
+        } catch (const GcodeError& e) {
+          // Name the arc's maker: the program has no such arc line.
+          const std::string prefix =
+              e.file() + ":" + std::to_string(e.line()) + ":" + std::to_string(e.column()) + ": ";
+          throw GcodeError(e.file(), e.line(), e.column(),
+                           std::string(e.what()).substr(prefix.size()) + " (an arc that " + name +
+                               " made from its profile)");
+        }
       } else {
         motion_ = m.kind == gcode::LatheMoveKind::Rapid ? 0 : 10;
         const Vector3d end = target(step, false);

@@ -192,9 +192,17 @@ class Output {
     if (moves_.size() >= kMaxMoves)
       refuse("expected a cycle of at most " + std::to_string(kMaxMoves) +
              " moves, found more (is the depth of cut I too small?)");
+    // A cycle stuck in place (where LinuxCNC's interpreter loops forever) repeats a move of
+    // no length; a real cycle makes at most a few in a row.
+    standing_ = !moves_.empty() && m.end == moves_.back().end ? standing_ + 1 : 0;
+    if (standing_ > 1000)
+      refuse(
+          "expected a cycle that ends, found one repeating a move of no length (LinuxCNC "
+          "loops forever here)");
     moves_.push_back(m);
   }
   int flips_;
+  int standing_ = 0;  ///< moves in a row that end where the last one did
   std::vector<LatheMove>& moves_;
 };
 

@@ -443,6 +443,11 @@ TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]"
              Contains("8:1: expected a profile that runs one way along the cut (no undercut)"));
   CHECK_THAT(errorOf("G18 F100\n" + profile + "G71 Q1 X10 Z2 I0\n"),
              Contains("8:1: expected a depth of cut I greater than zero, found I0"));
+  // Found by the fuzzer: a G72 where LinuxCNC's rs274 repeats one rapid forever.
+  CHECK_THAT(errorOf("G18 G21 F400\no101 sub\nG0 X-1 Z22\nG1 X-1 Z20\nG1 X5 Z20\nG1 X5 Z15\n"
+                     "G2 I5 K0 X10 Z10\nG1 X14 Z10\nG0 X14 Z8\no101 endsub\n"
+                     "G72 Q101 X0 Z6 D0.5 I1 R0.3\n"),
+             Contains("11:1: expected a cycle that ends, found one repeating a move of no length"));
   CHECK_THAT(errorOf("%\nG18 F100\no1 sub\nG1 X5 Z0\n%\nZ-10\no1 endsub\nG71 Q1 X10 Z2\n%\n"),
              Contains("5:1: expected O-endsub closing the profile subroutine o1, found the end"));
   CHECK_THAT(errorOf("G18 F100\no1 sub\nG1 X5 Z0\nG2 X7 Z-2 R2 K1\no1 endsub\nG71 Q1 X9 Z2\n"),
