@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -180,6 +181,7 @@ class Output {
     add({LatheMoveKind::Arc, to, back(centre), ccw != mirrored});
   }
   void move(bool rapidMove, P end) { rapidMove ? rapid(end) : line(end); }
+  std::size_t size() const { return moves_.size(); }
 
  private:
   P back(P p) const {
@@ -394,9 +396,23 @@ class Roughing {
   /// One pocket; true when another begins at (location, p).
   bool pocket(int variant, P& location, std::size_t& p, long& steps) {
     double x = starts_.back().imag();
+    // The loop's whole state; a round that leaves it as it was would repeat for ever.
+    struct State {
+      std::size_t p, moves;
+      double x;
+      P location;
+      bool operator==(const State& o) const {
+        return p == o.p && moves == o.moves && x == o.x && location == o.location;
+      }
+    };
+    std::optional<State> last;
     while (p < segs_.size()) {
-      if (++steps > kMaxSteps)
-        refuse("expected a roughing cycle that ends, found one that does not");
+      const State now{p, out_.size(), x, location};
+      if (++steps > kMaxSteps || (last && *last == now))
+        refuse(
+            "expected a roughing cycle that ends, found one that does not (LinuxCNC loops "
+            "forever here)");
+      last = now;
       if ((x - location.imag()) / depth_ > 1e7)
         refuse("expected at most ten million passes, found more (is I too small?)");
       while (x - kTol > location.imag())
