@@ -15,15 +15,19 @@ class GcodeError : public Error {
       : Error(file + ":" + std::to_string(line) + ":" + std::to_string(column) + ": " + message),
         file_(file),
         line_(line),
-        column_(column) {}
+        column_(column),
+        message_(message) {}
   const std::string& file() const { return file_; }
   int line() const { return line_; }
   int column() const { return column_; }
+  /// The message without its "file:line:col: " prefix.
+  const std::string& message() const { return message_; }
 
  private:
   std::string file_;
   int line_;
   int column_;
+  std::string message_;
 };
 
 }  // namespace engage

@@ -1255,11 +1255,9 @@ class Interpreter final : public gcode::ParameterSource {
     }
   }
 
-  /// G70-G72, LinuxCNC's lathe cycles. As LinuxCNC does, the profile subroutine Q is read
-  /// line by line, not executed: each line's X, Z, I, K, R and motion word (expressions
-  /// evaluated against the state at the cycle's line, in a fresh call frame), up to the first
-  /// O-endsub; control lines inside it are passed over. The cycle's moves (LatheCycle.h) then
-  /// run as G0/G1/G2/G3 blocks of the cycle's line, with absolute arc centres.
+  /// G70-G72, LinuxCNC's lathe cycles: a rapid to the cycle's start point, the profile read
+  /// from subroutine Q (readLatheProfile), and the cycle's moves (LatheCycle.h) run as
+  /// G0/G1/G2/G3 blocks of the cycle's line, with absolute arc centres.
   void latheCycle(const Words& w, int column) {
     const std::string name = codeName('G', motion_);
     if (!w.has('Q'))
@@ -1311,11 +1309,8 @@ class Interpreter final : public gcode::ParameterSource {
           arc(step, column);
         } catch (const GcodeError& e) {
           // Name the arc's maker: the program has no such arc line.
-          const std::string prefix =
-              e.file() + ":" + std::to_string(e.line()) + ":" + std::to_string(e.column()) + ": ";
           throw GcodeError(e.file(), e.line(), e.column(),
-                           std::string(e.what()).substr(prefix.size()) + " (an arc that " + name +
-                               " made from its profile)");
+                           e.message() + " (an arc that " + name + " made from its profile)");
         }
       } else {
         motion_ = m.kind == gcode::LatheMoveKind::Rapid ? 0 : 10;
@@ -1348,8 +1343,7 @@ class Interpreter final : public gcode::ParameterSource {
     execute(depth);
     if (frames_.size() >= depth)  // it stopped inside the subroutine (a closing '%')
       fail(1, "expected O-endsub closing the profile subroutine o" + label +
-                  ", found the end "
-                  "of the program");
+                  ", found the end of the program");
     std::vector<gcode::LatheSegment> segments = std::move(profile_->segments);
     profile_.reset();
     pos_ = machinePosition;
@@ -1404,9 +1398,8 @@ class Interpreter final : public gcode::ParameterSource {
       s.ccw = motion_ == 30;
       s.centre = centre;
     }
-    if (motion_ != 0 && motion_ != 10 && motion_ != 20 && motion_ != 30) {
-      // (as LinuxCNC) other motions add nothing; the next segment starts at their end
-    } else {
+    // (as LinuxCNC) other motions add nothing; the next segment starts at their end
+    if (motion_ == 0 || motion_ == 10 || motion_ == 20 || motion_ == 30) {
       p.segments.push_back(s);
       if (pw.has('A') && pw.has('C'))
         fail(pw.column('C'),

@@ -376,8 +376,9 @@ class Roughing {
   Roughing(const std::vector<LatheSegment>& segs, Output& out, double depth, double retract)
       : segs_(segs), out_(out), depth_(depth), escape_(retract * P(1.0, 1.0)) {}
 
-  /// Cuts from `location`, starting at segment p: passes I apart down to the profile, then
-  /// along the profile, and (variants 0 and 2) the pockets found on the way up.
+  /// Cuts from `location` (the start point): passes I apart down to the profile, then along
+  /// the profile, and (variants 0 and 2) the pockets found on the way up. Variant 2 becomes 3
+  /// inside: pockets only, each pocket's passes starting where it was found.
   void run(int variant, P location) {
     starts_.push_back(location);
     std::size_t p = 0;
