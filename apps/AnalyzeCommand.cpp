@@ -1,6 +1,6 @@
 #include "apps/AnalyzeCommand.h"
 
-#include "apps/ToolOptions.h"
+#include "apps/JobOptions.h"
 #include "cutters/Error.h"
 #include "engine/model/EngagementModel.h"
 #include "engine/units/Quantity.h"

@@ -1,12 +1,13 @@
 #include "apps/PaperCommand.h"
 
-#include "apps/Output.h"
 #include "apps/PocketCommand.h"
-#include "apps/SimulateCommand.h"
-#include "apps/ToolOptions.h"
 #include "cutters/Error.h"
 #include "engine/model/EngagementModel.h"
 #include "engine/report/Plots.h"
+#include "engine/run/CutterOptions.h"
+#include "engine/run/Job.h"
+#include "engine/run/Output.h"
+#include "engine/run/RunOutputs.h"
 #include "engine/schedule/FeedScheduler.h"
 #include "engine/sim/SteadyCut.h"
 #include "engine/units/Quantity.h"
@@ -238,24 +239,31 @@ Pocket makePocket(const PaperOptions& o, const fs::path& dir, const std::string&
 
 /// One simulation of the paper's examples, with the steps of its outer (wall) ring.
 struct Run {
-  SimulateOutcome outcome;
+  RunResult outcome;
   std::size_t first = 0, last = 0;  ///< steps of the outer ring: [first, last)
 };
 
 Run simulatePocket(const Pocket& pocket, const ToolOptions& tool, const std::string& stock,
                    const std::string& depth, const fs::path& out, const PaperOptions& o,
                    const std::string& label) {
-  SimulateOptions so;
-  so.program = pocket.program.string();
-  so.tool = tool;
-  so.stock = stock;
-  so.voxel = o.voxel;
-  so.stepover = "0.5in";
-  so.depth = depth;
-  so.out = out.string();
-  so.quiet = o.quiet;
-  so.progressLabel = "paper: " + label;
-  Run run{runSimulateJob(so), 0, 0};
+  const OptionValues values = {{"program", pocket.program.string()},
+                               {"tool", tool.tool},
+                               {"diameter", tool.diameter},
+                               {"corner-radius", tool.cornerRadius},
+                               {"taper-angle", tool.taperAngle},
+                               {"tip-angle", tool.tipAngle},
+                               {"bottom-angle", tool.bottomAngle},
+                               {"flute-length", tool.fluteLength},
+                               {"flutes", std::to_string(tool.flutes)},
+                               {"stock", stock},
+                               {"voxel", o.voxel},
+                               {"stepover", "0.5in"},
+                               {"depth", depth},
+                               {"out", out.string()},
+                               {"quiet", o.quiet ? "true" : "false"}};
+  Job job = makeJob(JobCommand::Simulate, values);
+  job.progressLabel = "paper: " + label;
+  Run run{runIntoFolder(std::move(job)).result, 0, 0};
   // The last ring is the wall pass: from its first line to the retract after it.
   const int from = pocket.ringLines.back();
   const auto& steps = run.outcome.sim.steps;
@@ -288,7 +296,7 @@ struct Ring {
 
 Ring outerRing(const Run& run, double depth) {
   const auto& steps = run.outcome.sim.steps;
-  const EngagementModel model(run.outcome.cutter, kS, depth);
+  const EngagementModel model(run.outcome.job.cutter, kS, depth);
   Ring r;
   r.target = model.mrr(kFeed, {});
   // engage's own schedule from the measured MRR: the straight cut's load as the target,
@@ -299,7 +307,7 @@ Ring outerRing(const Run& run, double depth) {
   so.feedMax = 2.0 * kFeed;
   so.acceleration = 0.3 * 9806.65;
   so.minChange = 0.01;
-  const Schedule plan = scheduleFeeds(run.outcome.path, run.outcome.sim, so);
+  const Schedule plan = scheduleFeeds(run.outcome.job.path, run.outcome.sim, so);
   const double targetPaper = model.mrrPaper(kFeed, {});
   const double s0 = run.first > 0 ? steps[run.first - 1].arcLength : 0.0;
   for (std::size_t i = run.first; i < run.last; ++i) {

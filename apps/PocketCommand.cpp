@@ -1,9 +1,9 @@
 #include "apps/PocketCommand.h"
 
-#include "apps/Output.h"
 #include "cutters/Error.h"
 #include "engine/cam/Pocket.h"
 #include "engine/gcode/GcodeReader.h"
+#include "engine/run/Output.h"
 #include "engine/units/Quantity.h"
 
 #include <cstdio>

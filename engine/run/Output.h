@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-namespace engage::app {
+namespace engage {
 
 /// Write `text` to `path` through `path.part`; throws Error naming the file when it fails.
 void writeAtomically(const std::filesystem::path& path, const std::string& text);
@@ -34,4 +34,4 @@ class OutputDirectory {
 /// Read a whole file; throws Error naming it when it cannot be read.
 std::string readFile(const std::filesystem::path& path);
 
-}  // namespace engage::app
+}  // namespace engage

@@ -1,34 +1,11 @@
-#include "apps/ToolOptions.h"
+#include "engine/run/CutterOptions.h"
 
 #include "cutters/Error.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace engage::app {
-
-void addToolOptions(CLI::App& command, ToolOptions& o, bool required) {
-  auto* tool = command.add_option("--tool", o.tool,
-                                  "cutter: flat, ball, bull, taper, tapered-ball, chamfer, apt");
-  tool->check(CLI::IsMember({"flat", "ball", "bull", "taper", "tapered-ball", "chamfer", "apt"}));
-  auto* diameter = command.add_option(
-      "--diameter", o.diameter,
-      "cutter diameter D (tip diameter of a taper, ball diameter of a tapered ball), e.g. 12mm");
-  if (required) {
-    tool->required();
-    diameter->required();
-  }
-  command.add_option("--corner-radius", o.cornerRadius, "corner radius r_tc (bull, apt)");
-  command.add_option("--taper-angle", o.taperAngle,
-                     "side angle beta to the tool axis (taper, tapered-ball, apt), e.g. 30deg");
-  command.add_option("--tip-angle", o.tipAngle, "included tip angle (chamfer), e.g. 90deg");
-  command.add_option("--bottom-angle", o.bottomAngle,
-                     "lower-line angle delta above the horizontal (apt)");
-  command.add_option(
-      "--flute-length", o.fluteLength,
-      "cutting height h above the tip (default 3 D, at least the cone of a chamfer)");
-  command.add_option("--flutes", o.flutes, "number of flutes")->capture_default_str();
-}
+namespace engage {
 
 std::optional<double> optionalQuantity(const std::string& text, Dimension dim, UnitSystem bare,
                                        const char* optionName) {
@@ -103,4 +80,4 @@ UnitSystem chooseUnitSystem(const std::string& unitsOption,
   return UnitSystem::Metric;
 }
 
-}  // namespace engage::app
+}  // namespace engage

@@ -1,24 +1,22 @@
 #pragma once
-/// \file ToolOptions.h
-/// The cutter options shared by every `engage` subcommand that needs a tool (--tool,
-/// --diameter, --corner-radius, --taper-angle, --tip-angle, --bottom-angle, --flute-length,
-/// --flutes), and the choice of unit system from what the user typed.
+/// \file CutterOptions.h
+/// A cutter from the options as typed (--tool, --diameter, --corner-radius, --taper-angle,
+/// --tip-angle, --bottom-angle, --flute-length, --flutes), and the choice of report unit
+/// system from what the user typed. The option names themselves are in OptionTable.h.
 
 #include "cutters/AptCutter.h"
 #include "engine/units/Quantity.h"
-
-#include <CLI/CLI.hpp>
 
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
-namespace engage::app {
+namespace engage {
 
-/// The raw option strings of a cutter, parsed by buildCutter.
+/// The option texts of a cutter, as typed, parsed by buildCutter.
 struct ToolOptions {
-  std::string tool;
+  std::string tool;  ///< flat, ball, bull, taper, tapered-ball, chamfer or apt
   std::string diameter;
   std::string cornerRadius;
   std::string taperAngle;
@@ -27,9 +25,6 @@ struct ToolOptions {
   std::string fluteLength;
   int flutes = 2;
 };
-
-/// Register the tool options on a subcommand. `required` makes --tool and --diameter required.
-void addToolOptions(CLI::App& command, ToolOptions& options, bool required);
 
 /// Build the cutter; bare numbers are read in `bare`. Throws UnitError or ParameterError,
 /// e.g. when an option does not fit the tool ("--corner-radius applies to bull and apt").
@@ -44,4 +39,4 @@ UnitSystem chooseUnitSystem(const std::string& unitsOption,
 std::optional<double> optionalQuantity(const std::string& text, Dimension dim, UnitSystem bare,
                                        const char* optionName);
 
-}  // namespace engage::app
+}  // namespace engage

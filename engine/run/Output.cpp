@@ -1,11 +1,11 @@
-#include "apps/Output.h"
+#include "engine/run/Output.h"
 
 #include "cutters/Error.h"
 
 #include <fstream>
 #include <sstream>
 
-namespace engage::app {
+namespace engage {
 
 void writeAtomically(const std::filesystem::path& path, const std::string& text) {
   const std::filesystem::path tmp = path.string() + ".part";
@@ -59,4 +59,4 @@ std::string readFile(const std::filesystem::path& path) {
   return s.str();
 }
 
-}  // namespace engage::app
+}  // namespace engage

@@ -1,0 +1,54 @@
+#include "apps/JobOptions.h"
+
+#include <map>
+
+namespace engage::app {
+namespace {
+
+/// The CLI11 side of one table entry bound to `target`.
+CLI::Option* addOption(CLI::App& cmd, const OptionInfo& o, std::string& target) {
+  CLI::Option* opt = cmd.add_option("--" + o.name, target, o.help);
+  if (o.kind == OptionKind::Choice) opt->check(CLI::IsMember(o.choices));
+  if (!o.defaultText.empty()) opt->capture_default_str();
+  return opt;
+}
+
+}  // namespace
+
+void addJobOptions(CLI::App& cmd, OptionValues& values, JobCommand command) {
+  cmd.add_option("program", values["program"], "G-code program")->required();
+  for (const OptionInfo& o : jobOptions()) {
+    if (!appliesTo(o, command)) continue;
+    if (o.kind == OptionKind::Flag) {
+      const std::string name = o.name;
+      cmd.add_flag_callback(
+          "--" + name, [&values, name] { values[name] = "true"; }, o.help);
+      continue;
+    }
+    std::string& target = values[o.name];
+    target = o.defaultText;
+    CLI::Option* opt = addOption(cmd, o, target);
+    if (o.required) opt->required();
+  }
+}
+
+void addToolOptions(CLI::App& cmd, ToolOptions& t, bool required) {
+  const std::map<std::string, std::string*> fields = {{"tool", &t.tool},
+                                                      {"diameter", &t.diameter},
+                                                      {"corner-radius", &t.cornerRadius},
+                                                      {"taper-angle", &t.taperAngle},
+                                                      {"tip-angle", &t.tipAngle},
+                                                      {"bottom-angle", &t.bottomAngle},
+                                                      {"flute-length", &t.fluteLength}};
+  for (const OptionInfo& o : jobOptions()) {
+    if (o.group != OptionGroup::Tool) continue;
+    if (o.name == "flutes") {
+      cmd.add_option("--flutes", t.flutes, o.help)->capture_default_str();
+      continue;
+    }
+    CLI::Option* opt = addOption(cmd, o, *fields.at(o.name));
+    if (required && o.required) opt->required();
+  }
+}
+
+}  // namespace engage::app

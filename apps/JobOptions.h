@@ -1,0 +1,22 @@
+#pragma once
+/// \file JobOptions.h
+/// The command-line face of OptionTable.h: every option of a simulate or schedule job
+/// registered on a subcommand by walking the table (names, help, defaults, choices), and the
+/// cutter options alone for the commands that need only a tool (analyze).
+
+#include "engine/run/CutterOptions.h"
+#include "engine/run/OptionTable.h"
+
+#include <CLI/CLI.hpp>
+
+namespace engage::app {
+
+/// Register the program and every option of `command` on `cmd`, storing the typed text in
+/// `values` (flags as "true"). `values` must outlive the parse.
+void addJobOptions(CLI::App& cmd, OptionValues& values, JobCommand command);
+
+/// Register the cutter options (the table's Tool group) bound to `options`. `required` makes
+/// --tool and --diameter required.
+void addToolOptions(CLI::App& cmd, ToolOptions& options, bool required);
+
+}  // namespace engage::app

@@ -1,0 +1,401 @@
+#include "engine/run/Batch.h"
+
+#include "cutters/Error.h"
+#include "engine/run/Job.h"
+#include "engine/run/Output.h"
+#include "engine/run/Pipeline.h"
+#include "engine/run/RunOutputs.h"
+#include "engine/run/Summary.h"
+
+#include <tbb/task_arena.h>
+#include <nlohmann/json.hpp>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace engage {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using nlohmann::ordered_json;
+
+std::string text(const json& v) {
+  return v.is_string() ? v.get<std::string>() : v.dump();
+}
+
+/// Check one key of a job's merged spec against the option table; false when the key is a
+/// schedule option inherited from the defaults by a simulate job (it does not concern it).
+bool checkKey(const std::string& key, const json& value, JobCommand command, const json& own,
+              const std::string& where) {
+  const OptionInfo* o = findJobOption(key);
+  if (!o) throw Error(where + ": unknown option \"" + key + "\"");
+  if (o->commandLineOnly)
+    throw Error(where + ": \"" + key +
+                "\" is not a job option (the batch sets each job's folder and shows progress)");
+  if (!appliesTo(*o, command)) {
+    if (own.contains(key)) throw Error(where + ": \"" + key + "\" applies to schedule jobs only");
+    return false;
+  }
+  if (!value.is_string() && !value.is_number() && !value.is_boolean())
+    throw Error(where + ": \"" + key + "\" must be a string, a number or true/false");
+  return true;
+}
+
+/// One job of the manifest, checked and with its files resolved against `base`.
+ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs::path& base,
+                    const std::string& where) {
+  if (!j.is_object()) throw Error(where + ": expected an object");
+  json spec = defaults;
+  spec.update(j);
+  if (!spec.contains("program")) throw Error(where + ": no \"program\"");
+  const std::string command = spec.value("command", "simulate");
+  if (command != "simulate" && command != "schedule")
+    throw Error(where + ": \"command\" must be simulate or schedule, found \"" + command + "\"");
+  spec["command"] = command;
+  ManifestJob job;
+  job.index = i;
+  job.command = command == "schedule" ? JobCommand::Schedule : JobCommand::Simulate;
+  // Relative files are relative to the manifest.
+  auto resolve = [&](const char* key) {
+    if (!spec.contains(key)) return;
+    const std::string v = text(spec[key]);
+    if (std::string(key) == "stock" && v.rfind("box:", 0) == 0) return;
+    if (fs::path(v).is_relative()) spec[key] = (base / v).lexically_normal().string();
+  };
+  resolve("program");
+  resolve("stock");
+  resolve("tool-table");
+  for (const auto& [key, value] : spec.items()) {
+    if (key == "name" || key == "command") continue;
+    if (key == "program" || checkKey(key, value, job.command, j, where))
+      job.values[key] = text(value);
+  }
+  job.name =
+      spec.contains("name") ? text(spec["name"]) : fs::path(text(spec["program"])).stem().string();
+  if (job.name.empty() || job.name.find_first_of("/\\") != std::string::npos || job.name == "." ||
+      job.name == "..")
+    throw Error(where + ": bad job name \"" + job.name + "\"");
+  spec["name"] = job.name;
+  job.specJson = spec.dump();
+  return job;
+}
+
+/// Run one job into DIR/jobs/NAME (through NAME.partial, renamed when complete) and return
+/// its record. A job's failure is its record; it never stops the batch.
+ordered_json runOne(const ManifestJob& job, const fs::path& jobs) {
+  const fs::path partial = jobs / (job.name + ".partial"), done = jobs / job.name;
+  fs::remove_all(partial);
+  fs::create_directories(partial);
+  const ordered_json spec = ordered_json::parse(job.specJson);
+  ordered_json r;
+  r["name"] = job.name;
+  r["index"] = job.index;
+  r["program"] = spec["program"];
+  r["command"] = spec["command"];
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    OptionValues values = job.values;
+    values["out"] = partial.string();
+    values["quiet"] = "true";
+    const CompletedRun run = runIntoFolder(makeJob(job.command, values));
+    const RunResult& out = run.result;
+    const WrittenOutputs& written = run.written;
+    const SimulationResult& sim = out.sim;
+    double peak = 0.0;
+    int peakLine = 0;
+    for (const StepRecord& s : sim.steps)
+      if (s.mrr > peak) {
+        peak = s.mrr;
+        peakLine = s.line;
+      }
+    r["status"] = "ok";
+    r["error"] = nullptr;
+    r["moves"] = out.job.path.moves.size();
+    r["steps"] = sim.steps.size();
+    r["removed_mm3"] = sim.removed;
+    r["peak_mrr_mm3_min"] = peak;
+    r["peak_mrr_line"] = peakLine;
+    r["cutting_time_s"] = sim.cuttingTime;
+    const bool scheduled = out.job.scheduling();
+    r["feed_time_before_s"] = scheduled ? ordered_json(out.plan.timeBefore) : ordered_json();
+    r["feed_time_after_s"] = scheduled ? ordered_json(out.plan.timeAfter) : ordered_json();
+    r["saving_relative"] = scheduled && out.plan.timeBefore > 0
+                               ? ordered_json(1.0 - out.plan.timeAfter / out.plan.timeBefore)
+                               : ordered_json();
+    r["warnings"] = runWarnings(out, written);
+  } catch (const std::exception& e) {
+    r["status"] = "failed";
+    r["error"] = e.what();
+    for (const char* key :
+         {"moves", "steps", "removed_mm3", "peak_mrr_mm3_min", "peak_mrr_line", "cutting_time_s",
+          "feed_time_before_s", "feed_time_after_s", "saving_relative"})
+      r[key] = nullptr;
+    r["warnings"] = ordered_json::array();
+    // A failed job keeps nothing but its record.
+    fs::remove_all(partial);
+    fs::create_directories(partial);
+  }
+  r["run_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r["spec"] = spec;
+  writeAtomically(partial / "job.json", r.dump(2) + "\n");
+  fs::remove_all(done);
+  fs::rename(partial, done);
+  return r;
+}
+
+/// The record of a finished job, or null when it has not run with these options.
+ordered_json recordOf(const ManifestJob& job, const fs::path& jobs) {
+  const fs::path file = jobs / job.name / "job.json";
+  if (!fs::exists(file)) return nullptr;
+  try {
+    ordered_json r = ordered_json::parse(readFile(file));
+    if (json(r["spec"]) != json::parse(job.specJson)) return nullptr;  // the manifest changed
+    return r;
+  } catch (const std::exception&) {
+    return nullptr;  // unreadable: run it again
+  }
+}
+
+struct Shard {
+  std::size_t index = 0, count = 1;
+};
+
+Shard parseShard(const std::string& s) {
+  if (s.empty()) return {};
+  const auto slash = s.find('/');
+  try {
+    if (slash == std::string::npos) throw std::invalid_argument(s);
+    std::size_t a = 0, b = 0;
+    const long i = std::stol(s.substr(0, slash), &a);
+    const long n = std::stol(s.substr(slash + 1), &b);
+    if (a != slash || b != s.size() - slash - 1 || n < 1 || i < 0 || i >= n)
+      throw std::invalid_argument(s);
+    return {static_cast<std::size_t>(i), static_cast<std::size_t>(n)};
+  } catch (const std::exception&) {
+    throw ParameterError("--shard: expected i/N with 0 <= i < N, found '" + s + "'");
+  }
+}
+
+std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& out, UnitSystem sys) {
+  const fs::path jobs = out / "jobs";
+  std::vector<ordered_json> records;
+  std::vector<std::string> missing;
+  for (const ManifestJob& j : all) {
+    ordered_json r = recordOf(j, jobs);
+    if (r.is_null())
+      missing.push_back(j.name);
+    else
+      records.push_back(std::move(r));
+  }
+  if (!missing.empty()) {
+    std::string list;
+    for (std::size_t i = 0; i < missing.size() && i < 10; ++i)
+      list += (i ? ", " : "") + missing[i];
+    if (missing.size() > 10) list += ", ...";
+    throw Error(std::to_string(missing.size()) + " of " + std::to_string(all.size()) +
+                " jobs have not run in '" + out.string() + "': " + list +
+                " (run their shards, then merge again)");
+  }
+  const std::string V(unitTag(Dimension::Volume, sys)), Q(unitTag(Dimension::VolumeRate, sys));
+  auto value = [&](const ordered_json& v, Dimension d) {
+    return v.is_null() ? std::string() : formatNumber(toDisplay(v.get<double>(), d, sys));
+  };
+  auto plain = [](const ordered_json& v) {
+    return v.is_null() ? std::string() : formatNumber(v.get<double>());
+  };
+  auto quote = [](std::string s) {
+    std::string q = "\"";
+    for (char c : s)
+      q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+  };
+  std::string csv = "job,name,command,program,status,run_time_s,moves,steps,removed_" + V +
+                    ",peak_mrr_" + Q +
+                    ",peak_mrr_line,cutting_time_s,feed_time_before_s,feed_time_after_s,"
+                    "saving_relative,warnings,error\n";
+  ordered_json summary = ordered_json::array();
+  std::size_t ok = 0;
+  for (const ordered_json& r : records) {
+    std::string warnings;
+    for (const auto& w : r["warnings"])
+      warnings += (warnings.empty() ? "" : "; ") + w.get<std::string>();
+    ok += r["status"] == "ok";
+    csv += std::to_string(r["index"].get<std::size_t>() + 1) + "," + quote(r["name"]) + "," +
+           r["command"].get<std::string>() + "," + quote(r["program"]) + "," +
+           r["status"].get<std::string>() + "," + plain(r["run_time_s"]) + "," + plain(r["moves"]) +
+           "," + plain(r["steps"]) + "," + value(r["removed_mm3"], Dimension::Volume) + "," +
+           value(r["peak_mrr_mm3_min"], Dimension::VolumeRate) + "," + plain(r["peak_mrr_line"]) +
+           "," + plain(r["cutting_time_s"]) + "," + plain(r["feed_time_before_s"]) + "," +
+           plain(r["feed_time_after_s"]) + "," + plain(r["saving_relative"]) + "," +
+           quote(warnings) + "," +
+           quote(r["error"].is_null() ? "" : r["error"].get<std::string>()) + "\n";
+    ordered_json s = r;
+    s.erase("spec");
+    summary.push_back(s);
+  }
+  ordered_json j;
+  j["jobs"] = records.size();
+  j["ok"] = ok;
+  j["failed"] = records.size() - ok;
+  j["units_of_csv"] = {{"volume", std::string(unitLabel(Dimension::Volume, sys))},
+                       {"mrr", std::string(unitLabel(Dimension::VolumeRate, sys))}};
+  j["records"] = summary;
+  writeAtomically(out / "batch.csv", csv);
+  writeAtomically(out / "batch.json", j.dump(2) + "\n");
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "merged %zu jobs (%zu ok, %zu failed) into %s/batch.csv, batch.json\n",
+                records.size(), ok, records.size() - ok, out.string().c_str());
+  return line;
+}
+
+UnitSystem unitsOf(const std::string& u) {
+  if (u == "in") return UnitSystem::Inch;
+  if (u == "mm") return UnitSystem::Metric;
+  throw ParameterError("--units: expected mm or in, found '" + u + "'");
+}
+
+}  // namespace
+
+BatchReport runBatch(const BatchOptions& o) {
+  const std::vector<ManifestJob> all = readManifest(o.manifest);
+  const Shard shard = parseShard(o.shard);
+  const UnitSystem sys = unitsOf(o.units);
+  if (o.workers < 0) throw ParameterError("--workers must not be negative");
+  const fs::path out(o.out), jobs = out / "jobs";
+  // Checked before any job runs; kept whatever happens next: a batch resumes from what its
+  // jobs left.
+  OutputDirectory(out).keep();
+  fs::create_directories(jobs);
+
+  // This shard's jobs: every N-th of the manifest, starting at i. Those with a record for
+  // the same options are done (failed ones too, unless --retry-failed).
+  std::vector<const ManifestJob*> todo;
+  std::size_t skipped = 0, mine = 0;
+  for (const ManifestJob& j : all) {
+    if (j.index % shard.count != shard.index) continue;
+    ++mine;
+    fs::remove_all(jobs / (j.name + ".partial"));  // left by an interrupted run
+    const ordered_json r = recordOf(j, jobs);
+    if (!r.is_null() && (r["status"] == "ok" || !o.retryFailed)) {
+      ++skipped;
+      continue;
+    }
+    todo.push_back(&j);
+  }
+
+  // Longest first, so that a long job does not start last and run alone (the program's size
+  // stands for its length; the order does not change any result).
+  std::stable_sort(todo.begin(), todo.end(), [](const ManifestJob* a, const ManifestJob* b) {
+    auto size = [](const ManifestJob* j) {
+      std::error_code ec;
+      const auto n = fs::file_size(j->values.at("program"), ec);
+      return ec ? std::uintmax_t(0) : n;
+    };
+    return size(a) > size(b);
+  });
+
+  // Workers: jobs side by side, each with its share of the threads (results do not depend
+  // on the thread count). Measured on 2 cores: 2 jobs side by side beat 1 job on 2 threads
+  // (README, "engage batch"), so the default is one job per core.
+  const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int workers =
+      std::max(1, std::min<int>(o.workers > 0 ? o.workers : cores, static_cast<int>(todo.size())));
+  const int threadsPerJob = std::max(1, cores / workers);
+  std::atomic<std::size_t> next{0}, finished{0}, failed{0};
+  std::mutex mutex;
+  const bool tty = isatty(2) && !o.quiet;
+  const auto start = std::chrono::steady_clock::now();
+  auto report = [&]() {
+    if (!tty) return;
+    const double s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::fprintf(stderr, "\rbatch: %zu / %zu jobs done, %zu failed (%.0f s)   ", finished.load(),
+                 todo.size(), failed.load(), s);
+  };
+  report();
+  std::vector<std::thread> pool;
+  for (int w = 0; w < workers; ++w)
+    pool.emplace_back([&]() {
+      tbb::task_arena arena(threadsPerJob);
+      for (std::size_t k; (k = next++) < todo.size();) {
+        ordered_json r;
+        arena.execute([&] { r = runOne(*todo[k], jobs); });
+        std::lock_guard<std::mutex> lock(mutex);
+        ++finished;
+        if (r["status"] != "ok") ++failed;
+        report();
+      }
+    });
+  for (std::thread& t : pool)
+    t.join();
+  if (tty) std::fprintf(stderr, "\n");
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  BatchReport result;
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "batch: shard %zu/%zu: %zu jobs: %zu run (%zu failed), %zu already done; %d "
+                "worker(s) x %d thread(s), %.1f s\n",
+                shard.index, shard.count, mine, todo.size(), failed.load(), skipped, workers,
+                threadsPerJob, seconds);
+  result.text = line;
+  if (shard.count == 1) result.text += mergeRecords(all, out, sys);
+  // Failed jobs, this run's or earlier ones: their errors are in their records.
+  for (const ManifestJob& j : all)
+    if (j.index % shard.count == shard.index) {
+      const ordered_json r = recordOf(j, jobs);
+      if (!r.is_null() && r["status"] != "ok")
+        result.failures.push_back("job " + j.name + " failed: " + r["error"].get<std::string>());
+    }
+  return result;
+}
+
+std::vector<ManifestJob> readManifest(const std::string& manifest) {
+  const fs::path path(manifest);
+  json m;
+  try {
+    m = json::parse(readFile(path));
+  } catch (const json::parse_error& e) {
+    throw Error(path.string() + ": not valid JSON: " + e.what());
+  }
+  if (!m.is_object() || !m.contains("jobs") || !m["jobs"].is_array())
+    throw Error(path.string() + ": expected an object with a \"jobs\" array");
+  const json defaults = m.value("defaults", json::object());
+  if (!defaults.is_object()) throw Error(path.string() + ": \"defaults\" must be an object");
+  for (const auto& [key, value] : m.items())
+    if (key != "jobs" && key != "defaults")
+      throw Error(path.string() + ": unknown key \"" + key + "\" (expected jobs, defaults)");
+  std::vector<ManifestJob> jobs;
+  std::map<std::string, std::size_t> names;
+  for (std::size_t i = 0; i < m["jobs"].size(); ++i) {
+    const std::string where = path.string() + ": job " + std::to_string(i + 1);
+    ManifestJob job = readJob(m["jobs"][i], defaults, i, path.parent_path(), where);
+    if (names.count(job.name))
+      throw Error(where + ": the name \"" + job.name + "\" is taken by job " +
+                  std::to_string(names[job.name] + 1) + "; give the jobs distinct \"name\"s");
+    names[job.name] = i;
+    jobs.push_back(std::move(job));
+  }
+  if (jobs.empty()) throw Error(path.string() + ": no jobs");
+  return jobs;
+}
+
+std::string mergeBatch(const BatchOptions& o) {
+  return mergeRecords(readManifest(o.manifest), o.out, unitsOf(o.units));
+}
+
+}  // namespace engage

@@ -1,0 +1,60 @@
+#pragma once
+/// \file Batch.h
+/// Many simulate/schedule jobs from a JSON manifest, side by side on one machine, or one shard
+/// of them per node of a cluster job array. The manifest's keys are the option names of
+/// OptionTable.h (a "defaults" object, then one object per job with "program", optional
+/// "name" and "command"); each job runs through the same pipeline as `engage simulate` into
+/// its own folder OUT/jobs/NAME with its record job.json, written last (a rerun skips jobs
+/// whose record is there and whose options are unchanged). A merge joins the records into
+/// OUT/batch.csv and batch.json.
+
+#include "engine/run/OptionTable.h"
+#include "engine/units/Quantity.h"
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace engage {
+
+/// One job of a manifest: its options merged over the defaults, checked against the table.
+struct ManifestJob {
+  std::size_t index = 0;  ///< 0-based place in the manifest
+  std::string name;       ///< folder name under OUT/jobs
+  JobCommand command = JobCommand::Simulate;
+  OptionValues values;   ///< the options as typed, files resolved against the manifest
+  std::string specJson;  ///< the spec as recorded in job.json (compact JSON)
+};
+
+/// Read and check a manifest: every structural problem (not JSON, unknown or misplaced keys,
+/// duplicate names) is reported here, before any job runs. Relative files are relative to the
+/// manifest. Throws Error naming the manifest and the job.
+std::vector<ManifestJob> readManifest(const std::string& path);
+
+/// The settings of a batch or merge.
+struct BatchOptions {
+  std::string manifest;
+  std::string out = "out/batch";
+  std::string shard;  ///< "i/N" or empty (all)
+  int workers = 0;    ///< 0: one per core
+  bool retryFailed = false;
+  bool quiet = false;
+  std::string units = "mm";  ///< of batch.csv
+};
+
+/// What a batch run tells its user.
+struct BatchReport {
+  std::string text;                   ///< the lines for stdout
+  std::vector<std::string> failures;  ///< "job NAME failed: ERROR", one per failed job
+};
+
+/// Run the shard's jobs that have no record yet (and failed ones with retryFailed); with
+/// one shard, merge too. A job's failure is its record, never the batch's. Throws Error for a
+/// bad manifest, shard or output folder.
+BatchReport runBatch(const BatchOptions& options);
+
+/// Join the records of every job of the manifest into batch.csv and batch.json; returns the
+/// line to print. Throws Error naming the jobs that have not run (nothing is written then).
+std::string mergeBatch(const BatchOptions& options);
+
+}  // namespace engage

@@ -1,0 +1,192 @@
+#include "engine/run/Job.h"
+
+#include "cutters/Error.h"
+#include "engine/gcode/GcodeReader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace engage {
+namespace {
+
+/// Check that every name is an option of `command` and that each value has the kind the table
+/// says (quantities are read later, when the unit system is known).
+void checkNames(JobCommand command, const OptionValues& values) {
+  for (const auto& [name, text] : values) {
+    if (name == "program") continue;
+    const OptionInfo* o = findJobOption(name);
+    if (!o) throw ParameterError("unknown option \"" + name + "\"");
+    if (!appliesTo(*o, command))
+      throw ParameterError("--" + name + " applies to schedule jobs only");
+    if (o->kind == OptionKind::Choice && !text.empty() &&
+        std::find(o->choices.begin(), o->choices.end(), text) == o->choices.end()) {
+      std::string list;
+      for (std::size_t i = 0; i < o->choices.size(); ++i)
+        list += (i == 0 ? "" : i + 1 == o->choices.size() ? " or " : ", ") + o->choices[i];
+      throw ParameterError("--" + name + ": expected " + list + ", found '" + text + "'");
+    }
+    if (o->kind == OptionKind::Flag && text != "true" && text != "false")
+      throw ParameterError("--" + name + ": expected true or false, found '" + text + "'");
+  }
+}
+
+int wholeNumber(const std::string& text, const char* name) {
+  try {
+    std::size_t used = 0;
+    const int n = std::stoi(text, &used);
+    if (used != text.size()) throw std::invalid_argument(text);
+    return n;
+  } catch (const std::exception&) {
+    throw ParameterError(std::string(name) + ": expected a whole number, found '" + text + "'");
+  }
+}
+
+double plainNumber(const std::string& text, const std::string& message) {
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used != text.size()) throw std::invalid_argument(text);
+    return v;
+  } catch (const std::exception&) {
+    throw ParameterError(message);
+  }
+}
+
+/// box:X0,Y0,Z0,X1,Y1,Z1 with bare numbers in `sys`; a mesh file otherwise.
+StockSpec parseStock(const std::string& text, UnitSystem sys) {
+  StockSpec s;
+  s.text = text;
+  if (text.rfind("box:", 0) != 0) {
+    s.mesh = text;
+    return s;
+  }
+  std::vector<double> v;
+  std::stringstream in(text.substr(4));
+  std::string item;
+  while (std::getline(in, item, ','))
+    v.push_back(parseQuantity(item, Dimension::Length, sys, "--stock box").value);
+  if (v.size() != 6)
+    throw ParameterError("--stock: expected box:X0,Y0,Z0,X1,Y1,Z1 (six numbers), found " +
+                         std::to_string(v.size()) + " in '" + text + "'");
+  Box3 b;
+  b.min = {std::min(v[0], v[3]), std::min(v[1], v[4]), std::min(v[2], v[5])};
+  b.max = {std::max(v[0], v[3]), std::max(v[1], v[4]), std::max(v[2], v[5])};
+  s.box = b;
+  return s;
+}
+
+/// The schedule's settings (schedule jobs only).
+ScheduleOptions scheduleOptions(const OptionValues& values, UnitSystem sys, double diameter) {
+  auto text = [&](const char* name) { return optionText(values, name); };
+  auto quantity = [&](const char* name, Dimension d) {
+    const std::string t = text(name);
+    return t.empty() ? 0.0 : parseQuantity(t, d, sys, "--" + std::string(name)).value;
+  };
+  ScheduleOptions s;
+  const std::string target = text("target-mrr");
+  if (target != "auto")
+    s.targetMrr = parseQuantity(target, Dimension::VolumeRate, sys, "--target-mrr").value;
+  s.feedMin = quantity("feed-min", Dimension::Feed);
+  s.feedMax = quantity("feed-max", Dimension::Feed);
+  s.airFeed = quantity("air-feed", Dimension::Feed);
+  s.acceleration = quantity("accel", Dimension::Acceleration);
+  s.jerk = quantity("jerk", Dimension::Jerk);
+  s.rapidFeed = quantity("rapid-feed", Dimension::Feed);
+  const std::string change = text("min-change");
+  s.minChange =
+      plainNumber(change, "--min-change: expected a fraction such as 0.05, found '" + change + "'");
+  if (!(s.minChange > 0.0 && s.minChange < 1.0))
+    throw ParameterError("--min-change: expected a fraction in (0, 1), found " + change);
+  s.minSegment = quantity("min-segment", Dimension::Length);
+  s.analytic = text("model") == "analytic";
+  if (!text("force-limit").empty()) {
+    if (target != "auto") throw ParameterError("give either --target-mrr or --force-limit");
+    if (text("specific-energy").empty() || text("spindle").empty())
+      throw ParameterError("--force-limit needs --specific-energy and --spindle (paper Eq 17-18)");
+    s.targetMrr = mrrForForce(quantity("force-limit", Dimension::Force),
+                              quantity("specific-energy", Dimension::SpecificEnergy), diameter,
+                              quantity("spindle", Dimension::SpindleSpeed));
+  }
+  return s;
+}
+
+}  // namespace
+
+const char* stockModelName(StockModel model) {
+  return model == StockModel::Dexel ? "dexel" : "voxel";
+}
+
+std::string optionText(const OptionValues& values, const std::string& name) {
+  const auto it = values.find(name);
+  if (it != values.end()) return it->second;
+  const OptionInfo* o = findJobOption(name);
+  return o ? o->defaultText : std::string();
+}
+
+Job makeJob(JobCommand command, const OptionValues& values) {
+  checkNames(command, values);
+  auto text = [&](const char* name) { return optionText(values, name); };
+  for (const OptionInfo& o : jobOptions())
+    if (o.required && text(o.name.c_str()).empty())
+      throw ParameterError("--" + o.name + " is required");
+  Job job;
+  job.command = command;
+  job.program = text("program");
+  if (job.program.empty()) throw ParameterError("no program given");
+  // Everything that can be checked is checked here, before any work and before any output.
+  ReaderOptions ro;
+  ro.toolTable = text("tool-table");
+  job.path = readProgram(job.program, ro);
+  const std::string units = text("units");
+  const UnitSystem sys = units == "in"   ? UnitSystem::Inch
+                         : units == "mm" ? UnitSystem::Metric
+                         : job.path.inch ? UnitSystem::Inch
+                                         : UnitSystem::Metric;
+  job.units = sys;
+  ToolOptions tool{text("tool"),          text("diameter"),
+                   text("corner-radius"), text("taper-angle"),
+                   text("tip-angle"),     text("bottom-angle"),
+                   text("flute-length"),  wholeNumber(text("flutes"), "--flutes")};
+  job.toolText = tool.tool;
+  job.cutter = buildCutter(tool, sys);
+  const std::string voxel = text("voxel");
+  job.voxel = voxel.empty() ? 2.0 * job.cutter.radius() / 20.0
+                            : parseQuantity(voxel, Dimension::Length, sys, "--voxel").value;
+  if (!(job.voxel > 0.0)) throw ParameterError("--voxel must be positive");
+  const std::string step = text("step");
+  SimulationOptions& so = job.simulation;
+  so.stepLength = step.empty() ? 0.0 : parseQuantity(step, Dimension::Length, sys, "--step").value;
+  if (!step.empty() && !(so.stepLength > 0.0)) throw ParameterError("--step must be positive");
+  if (!text("stepover").empty())
+    so.stepover = parseQuantity(text("stepover"), Dimension::Length, sys, "--stepover").value;
+  if (!text("depth").empty())
+    so.depth = parseQuantity(text("depth"), Dimension::Length, sys, "--depth").value;
+  if (job.scheduling()) job.schedule = scheduleOptions(values, sys, 2.0 * job.cutter.radius());
+  const bool analytic = job.scheduling() && text("model") == "analytic";
+  job.materialSide = text("material-side");
+  job.materialOnRight = job.materialSide != "left";
+  job.crossCheck = text("cross-check") == "true";
+  const std::string tolerance = text("cross-check-tolerance");
+  job.crossTolerance =
+      plainNumber(tolerance, "--cross-check-tolerance: expected a fraction in (0, 1)");
+  // Without a stock (schedule --model analytic only) the steps carry the analytic model
+  // alone, as in the paper.
+  const std::string stock = text("stock");
+  if (stock.empty() && !analytic)
+    throw ParameterError("--stock is required (only schedule --model analytic runs without one)");
+  if (!stock.empty() && !job.materialSide.empty())
+    throw ParameterError("--material-side applies without --stock (the stock tells the side)");
+  if (job.crossCheck && stock.empty()) throw ParameterError("--cross-check needs a --stock");
+  if (!(job.crossTolerance > 0.0 && job.crossTolerance < 1.0))
+    throw ParameterError("--cross-check-tolerance: expected a fraction in (0, 1)");
+  job.stockModel = text("stock-model") == "dexel" ? StockModel::Dexel : StockModel::Voxel;
+  if (!stock.empty()) job.stock = parseStock(stock, sys);
+  job.out = text("out");
+  job.quiet = text("quiet") == "true";
+  job.progressLabel = commandName(command);
+  return job;
+}
+
+}  // namespace engage

@@ -1,0 +1,74 @@
+#pragma once
+/// \file Job.h
+/// One simulate or schedule job as a value: the program read, the cutter built, the stock
+/// described, and every setting typed and in internal units (mm, mm/min, mm^3/min, s). The
+/// command line, a batch manifest and the Python module make it the same way, by makeJob from
+/// the option values of OptionTable.h; makeJob is the one validation, and its errors name the
+/// option and the value found.
+
+#include "cutters/AptCutter.h"
+#include "engine/gcode/Toolpath.h"
+#include "engine/run/CutterOptions.h"
+#include "engine/run/OptionTable.h"
+#include "engine/schedule/FeedScheduler.h"
+#include "engine/sim/Simulation.h"
+#include "engine/units/Quantity.h"
+
+#include <optional>
+#include <string>
+
+namespace engage {
+
+/// The two stock models.
+enum class StockModel { Voxel, Dexel };
+
+/// "voxel" or "dexel".
+const char* stockModelName(StockModel model);
+
+/// The stock of a job: none (schedule --model analytic), a box (mm) or a closed mesh file (mm).
+struct StockSpec {
+  std::string text;         ///< as typed ("" for none), shown in summary.json
+  std::optional<Box3> box;  ///< a box:X0,Y0,Z0,X1,Y1,Z1, ordered corners, mm
+  std::string mesh;         ///< a mesh file, when not a box
+  bool none() const { return text.empty(); }
+};
+
+/// A job, checked: everything in it is valid.
+struct Job {
+  JobCommand command = JobCommand::Simulate;
+  std::string program;   ///< the program's path, as given
+  Toolpath path;         ///< the program, read
+  std::string toolText;  ///< the --tool value, as typed (summary.json)
+  AptCutter cutter = AptCutter::flat(1.0, 1.0);
+  StockSpec stock;
+  StockModel stockModel = StockModel::Voxel;
+  UnitSystem units = UnitSystem::Metric;  ///< of the reports (and of bare numbers)
+  double voxel = 0.0;                     ///< voxel size or dexel ray spacing, mm
+  SimulationOptions simulation;           ///< step length, stepover, depth (no progress)
+  bool crossCheck = false;                ///< also run the other stock model
+  double crossTolerance = 0.03;           ///< relative per-step difference it allows
+  ScheduleOptions schedule;               ///< used by schedule jobs
+  /// Without a stock: the stock is on the right of the path (climb with M3) or on the left.
+  bool materialOnRight = true;
+  std::string materialSide;  ///< as typed ("" = default right)
+  std::string out = "out";   ///< output folder
+  bool quiet = false;        ///< no progress on the terminal
+  std::string progressLabel = "simulate";
+
+  bool scheduling() const { return command == JobCommand::Schedule; }
+  /// The other stock model, for the cross-check.
+  StockModel otherModel() const {
+    return stockModel == StockModel::Voxel ? StockModel::Dexel : StockModel::Voxel;
+  }
+};
+
+/// Read the program named by values["program"] and check every option: unknown names, values
+/// of the wrong kind, options that do not apply to `command`, inconsistent combinations. Bare
+/// numbers are read in the report units (--units, else the program's). Throws Error (a
+/// GcodeError, UnitError or ParameterError) naming the option and the value.
+Job makeJob(JobCommand command, const OptionValues& values);
+
+/// The value of option `name` in `values`, or the table's default.
+std::string optionText(const OptionValues& values, const std::string& name);
+
+}  // namespace engage

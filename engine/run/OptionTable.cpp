@@ -1,0 +1,148 @@
+#include "engine/run/OptionTable.h"
+
+namespace engage {
+namespace {
+
+OptionInfo quantity(const char* name, OptionGroup group, Dimension d, const char* help) {
+  OptionInfo o;
+  o.name = name;
+  o.kind = OptionKind::Quantity;
+  o.group = group;
+  o.dimension = d;
+  o.help = help;
+  return o;
+}
+
+OptionInfo choice(const char* name, OptionGroup group, std::vector<std::string> choices,
+                  const char* defaultText, const char* help) {
+  OptionInfo o;
+  o.name = name;
+  o.kind = OptionKind::Choice;
+  o.group = group;
+  o.choices = std::move(choices);
+  o.defaultText = defaultText;
+  o.help = help;
+  return o;
+}
+
+OptionInfo plain(const char* name, OptionKind kind, OptionGroup group, const char* defaultText,
+                 const char* help) {
+  OptionInfo o;
+  o.name = name;
+  o.kind = kind;
+  o.group = group;
+  o.defaultText = defaultText;
+  o.help = help;
+  return o;
+}
+
+OptionInfo scheduleOnly(OptionInfo o) {
+  o.scheduleOnly = true;
+  return o;
+}
+
+OptionInfo required(OptionInfo o) {
+  o.required = true;
+  return o;
+}
+
+OptionInfo commandLineOnly(OptionInfo o) {
+  o.commandLineOnly = true;
+  return o;
+}
+
+std::vector<OptionInfo> makeTable() {
+  using D = Dimension;
+  using G = OptionGroup;
+  using K = OptionKind;
+  return {
+      required(choice("tool", G::Tool,
+                      {"flat", "ball", "bull", "taper", "tapered-ball", "chamfer", "apt"}, "",
+                      "cutter: flat, ball, bull, taper, tapered-ball, chamfer, apt")),
+      required(quantity("diameter", G::Tool, D::Length,
+                        "cutter diameter D (tip diameter of a taper, ball diameter of a tapered "
+                        "ball), e.g. 12mm")),
+      quantity("corner-radius", G::Tool, D::Length, "corner radius r_tc (bull, apt)"),
+      quantity("taper-angle", G::Tool, D::Angle,
+               "side angle beta to the tool axis (taper, tapered-ball, apt), e.g. 30deg"),
+      quantity("tip-angle", G::Tool, D::Angle, "included tip angle (chamfer), e.g. 90deg"),
+      quantity("bottom-angle", G::Tool, D::Angle,
+               "lower-line angle delta above the horizontal (apt)"),
+      quantity("flute-length", G::Tool, D::Length,
+               "cutting height h above the tip (default 3 D, at least the cone of a chamfer)"),
+      plain("flutes", K::Count, G::Tool, "2", "number of flutes"),
+      plain("stock", K::Text, G::Stock, "",
+            "box:X0,Y0,Z0,X1,Y1,Z1 (program units) or a closed STL/OBJ/PLY mesh (mm); schedule "
+            "--model analytic runs without one"),
+      choice("stock-model", G::Stock, {"voxel", "dexel"}, "voxel",
+             "voxel (volume fractions) or dexel (vertical rays); --voxel sets the ray spacing"),
+      quantity("voxel", G::Simulation, D::Length, "voxel size (default: cutter diameter / 20)"),
+      quantity("step", G::Simulation, D::Length, "longest step (default: 2.5 voxels)"),
+      quantity("stepover", G::Simulation, D::Length,
+               "stepover for the analytic model (default: measured width)"),
+      quantity("depth", G::Simulation, D::Length,
+               "depth of cut for the analytic model (default: measured depth)"),
+      choice("units", G::Output, {"mm", "in"}, "",
+             "report units: mm or in (default: the program's)"),
+      plain("tool-table", K::Text, G::Simulation, "", "LinuxCNC tool table for G43"),
+      plain("cross-check", K::Flag, G::Simulation, "",
+            "also run the other stock model and report the steps where they disagree"),
+      plain("cross-check-tolerance", K::Fraction, G::Simulation, "0.03",
+            "relative per-step difference allowed by --cross-check"),
+      commandLineOnly(plain("out", K::Text, G::Output, "out", "output folder")),
+      commandLineOnly(plain("quiet", K::Flag, G::Output, "", "no progress on the terminal")),
+      scheduleOnly(plain("target-mrr", K::Text, G::Schedule, "auto",
+                         "target MRR, e.g. 18000mm3/min, or auto")),
+      scheduleOnly(quantity("feed-min", G::Schedule, D::Feed, "lowest feed to command")),
+      scheduleOnly(quantity("feed-max", G::Schedule, D::Feed,
+                            "highest feed to command (default: twice the programmed)")),
+      scheduleOnly(quantity("air-feed", G::Schedule, D::Feed,
+                            "feed where nothing is cut (default: the programmed)")),
+      scheduleOnly(quantity("accel", G::Schedule, D::Acceleration,
+                            "tangential acceleration limit, e.g. 2000mm/s2 or 0.3g")),
+      scheduleOnly(quantity("jerk", G::Schedule, D::Jerk,
+                            "jerk limit, e.g. 50000mm/s3: room for the controller's S-curves")),
+      scheduleOnly(
+          quantity("rapid-feed", G::Schedule, D::Feed,
+                   "the machine's rapid feed, to time rapids in the cycle time, e.g. 15000mm/min")),
+      scheduleOnly(
+          plain("min-change", K::Fraction, G::Schedule, "0.05", "relative step between F levels")),
+      scheduleOnly(quantity("min-segment", G::Schedule, D::Length,
+                            "shortest run of one feed along the path")),
+      scheduleOnly(quantity(
+          "force-limit", G::Schedule, D::Force,
+          "tangential force to hold instead of an MRR (with --specific-energy, --spindle)")),
+      scheduleOnly(quantity("specific-energy", G::Schedule, D::SpecificEnergy,
+                            "specific cutting energy, e.g. 0.7J/mm3")),
+      scheduleOnly(
+          quantity("spindle", G::Schedule, D::SpindleSpeed, "spindle speed, e.g. 12000rpm")),
+      scheduleOnly(
+          choice("material-side", G::Schedule, {"right", "left"}, "",
+                 "without --stock: the stock's side of the path (default right: climb, M3)")),
+      scheduleOnly(choice("model", G::Schedule, {"measured", "analytic"}, "measured",
+                          "schedule from the measured MRR or the analytic model")),
+  };
+}
+
+}  // namespace
+
+const std::vector<OptionInfo>& jobOptions() {
+  static const std::vector<OptionInfo> table = makeTable();
+  return table;
+}
+
+const OptionInfo* findJobOption(const std::string& name) {
+  for (const OptionInfo& o : jobOptions())
+    if (o.name == name) return &o;
+  return nullptr;
+}
+
+bool appliesTo(const OptionInfo& option, JobCommand command) {
+  return !option.scheduleOnly || command == JobCommand::Schedule;
+}
+
+const char* commandName(JobCommand command) {
+  return command == JobCommand::Schedule ? "schedule" : "simulate";
+}
+
+}  // namespace engage

@@ -1,0 +1,130 @@
+#include "engine/run/Pipeline.h"
+
+#include "cutters/Error.h"
+#include "engine/gcode/GcodeWriter.h"
+#include "engine/run/Output.h"
+#include "stock/DexelStock.h"
+#include "stock/VoxelStock.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+namespace engage {
+namespace {
+
+/// A stock of the chosen model at resolution h (voxel size or ray spacing).
+std::unique_ptr<Stock> makeStock(const StockSpec& spec, StockModel model, double h) {
+  const bool dexel = model == StockModel::Dexel;
+  if (spec.box) {
+    if (dexel) return std::make_unique<DexelStock>(DexelStock::box(*spec.box, h));
+    return std::make_unique<VoxelStock>(VoxelStock::box(*spec.box, h));
+  }
+  // Meshes are read in mm.
+  if (dexel) return std::make_unique<DexelStock>(DexelStock::fromMesh(spec.mesh, h));
+  return std::make_unique<VoxelStock>(VoxelStock::fromMesh(spec.mesh, h));
+}
+
+/// Throws when no move of the path comes near the stock: a wrong box or wrong units.
+void checkReach(const Job& job, const Stock& stock) {
+  const Box3 sb = stock.bounds();
+  const double w = job.cutter.maxRadius();
+  for (const Move& m : job.path.moves) {
+    // An arc can bulge up to its diameter beyond its end points.
+    const double reach = w + (m.kind == MoveKind::Arc ? 2.0 * arcRadius(m) : 0.0);
+    const Eigen::Vector3d lo = m.start.cwiseMin(m.end) - Eigen::Vector3d(reach, reach, 0.0);
+    const Eigen::Vector3d hi =
+        m.start.cwiseMax(m.end) + Eigen::Vector3d(reach, reach, job.cutter.height());
+    if ((lo.array() <= sb.max.array()).all() && (hi.array() >= sb.min.array()).all()) return;
+  }
+  const UnitSystem sys = job.units;
+  auto f = [&](double v) { return formatQuantity(v, Dimension::Length, sys); };
+  throw ParameterError("the tool path never reaches the stock (stock from " + f(sb.min.x()) + ", " +
+                       f(sb.min.y()) + ", " + f(sb.min.z()) + " to " + f(sb.max.x()) + ", " +
+                       f(sb.max.y()) + ", " + f(sb.max.z()) + ")");
+}
+
+CrossCheck crossCheck(const Job& job, const SimulationResult& r, Stock& other) {
+  CrossCheck c;
+  SimulationOptions oo = job.simulation;
+  oo.progress = nullptr;
+  c.other = simulate(job.path, job.cutter, other, oo);
+  c.floorVolume = 4.0 * job.voxel * job.voxel * job.voxel;
+  c.differs.assign(r.steps.size(), 0);
+  for (std::size_t i = 0; i < r.steps.size(); ++i) {
+    const double a = r.steps[i].removed, b = c.other.steps[i].removed;
+    const double gap = std::abs(a - b);
+    if (std::max(a, b) > c.floorVolume)
+      c.worstRelative = std::max(c.worstRelative, gap / std::max(a, b));
+    if (gap > job.crossTolerance * std::max(a, b) + c.floorVolume) {
+      c.differs[i] = 1;
+      c.differing.push_back(i);
+    }
+  }
+  std::stable_sort(c.differing.begin(), c.differing.end(), [&](std::size_t x, std::size_t y) {
+    return std::abs(r.steps[x].removed - c.other.steps[x].removed) >
+           std::abs(r.steps[y].removed - c.other.steps[y].removed);
+  });
+  c.otherMemoryBytes = other.memoryBytes();
+  return c;
+}
+
+}  // namespace
+
+PreparedRun prepareRun(Job job) {
+  PreparedRun run;
+  if (!job.stock.none()) {
+    run.stock = makeStock(job.stock, job.stockModel, job.voxel);
+    if (job.crossCheck) run.other = makeStock(job.stock, job.otherModel(), job.voxel);
+    checkReach(job, *run.stock);
+    if (auto* v = dynamic_cast<VoxelStock*>(run.stock.get())) v->captureRemoved(true);
+    if (auto* d = dynamic_cast<DexelStock*>(run.stock.get())) d->captureRemoved(true);
+  }
+  run.job = std::move(job);
+  return run;
+}
+
+RunResult executeRun(PreparedRun run, const ProgressFunction& progress) {
+  RunResult r;
+  r.job = std::move(run.job);
+  r.stock = std::move(run.stock);
+  const Job& job = r.job;
+  SimulationOptions so = job.simulation;
+  so.progress = progress;
+  r.sim = r.stock ? simulate(job.path, job.cutter, *r.stock, so)
+                  : analyticSteps(job.path, job.cutter, so, job.materialOnRight);
+  if (job.crossCheck && run.other) {
+    r.cross = crossCheck(job, r.sim, *run.other);
+    r.crossChecked = true;
+  }
+  if (job.scheduling()) {
+    r.plan = scheduleFeeds(job.path, r.sim, job.schedule);
+    r.refed = writeProgram(readFile(job.program), job.path, r.plan.plan);
+  }
+  for (std::size_t i = 0; i < r.sim.steps.size(); ++i)
+    if (r.sim.steps[i].mrr > r.sim.steps[r.peakStep].mrr) r.peakStep = i;
+  return r;
+}
+
+RunResult runJob(Job job, const ProgressFunction& progress) {
+  return executeRun(prepareRun(std::move(job)), progress);
+}
+
+ProgressFunction terminalProgress(const std::string& label, bool quiet) {
+  if (quiet || !isatty(2)) return {};
+  auto last =
+      std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
+  return [label, last](std::size_t done, std::size_t total) {
+    const auto now = std::chrono::steady_clock::now();
+    if (done < total && now - *last < std::chrono::milliseconds(200)) return;
+    *last = now;
+    std::fprintf(stderr, "\r%s: %zu / %zu steps (%.0f %%)", label.c_str(), done, total,
+                 100.0 * static_cast<double>(done) / static_cast<double>(total));
+    if (done == total) std::fprintf(stderr, "\n");
+  };
+}
+
+}  // namespace engage

@@ -1,0 +1,69 @@
+#pragma once
+/// \file Pipeline.h
+/// The run of one job: its stocks built and checked (prepareRun: everything that can fail on
+/// the input fails here, before any output is made), then the simulation, the cross-check
+/// against the other stock model and the schedule with its re-fed program (executeRun). The
+/// result holds everything the output writers (RunOutputs.h) and the Python module read.
+
+#include "engine/run/Job.h"
+#include "engine/schedule/FeedScheduler.h"
+#include "engine/sim/Simulation.h"
+#include "stock/Stock.h"
+
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace engage {
+
+/// The same steps through the other stock model, compared per step. A step differs when its
+/// volumes differ by more than the tolerance of the larger, plus a floor of four cells (steps
+/// that remove almost nothing differ by rounding alone).
+struct CrossCheck {
+  SimulationResult other;              ///< the other model's run
+  std::vector<char> differs;           ///< per step: 1 where it differs
+  std::vector<std::size_t> differing;  ///< the differing steps, largest gap first
+  double worstRelative = 0.0;          ///< largest relative gap above the floor
+  double floorVolume = 0.0;            ///< four cells, mm^3
+  std::size_t otherMemoryBytes = 0;    ///< the other stock's memory
+};
+
+/// A job whose stocks are built: ready to run.
+struct PreparedRun {
+  Job job;
+  std::unique_ptr<Stock> stock;  ///< null without a stock
+  std::unique_ptr<Stock> other;  ///< the cross-check's stock, or null
+};
+
+/// Called now and then with (steps done, steps in all).
+using ProgressFunction = std::function<void(std::size_t, std::size_t)>;
+
+/// Everything a run made.
+struct RunResult {
+  Job job;
+  std::unique_ptr<Stock> stock;  ///< the final stock (null without one)
+  SimulationResult sim;
+  bool crossChecked = false;
+  CrossCheck cross;          ///< when crossChecked
+  Schedule plan;             ///< empty unless the job schedules
+  std::string refed;         ///< the re-fed program text (schedule jobs)
+  std::size_t peakStep = 0;  ///< the step of the highest measured MRR (0 when none)
+};
+
+/// Build the job's stock (and the cross-check's) and check that the tool path reaches it.
+/// Throws Error; writes nothing.
+PreparedRun prepareRun(Job job);
+
+/// Simulate, cross-check and schedule. Throws Error from the model or the stock.
+RunResult executeRun(PreparedRun run, const ProgressFunction& progress = {});
+
+/// prepareRun then executeRun.
+RunResult runJob(Job job, const ProgressFunction& progress = {});
+
+/// A progress function that draws "label: done / total steps (p %)" on stderr when it is a
+/// terminal and `quiet` is false; an empty function otherwise.
+ProgressFunction terminalProgress(const std::string& label, bool quiet);
+
+}  // namespace engage

@@ -1,0 +1,68 @@
+#include "engine/run/RunOutputs.h"
+
+#include "cutters/Error.h"
+#include "engine/report/Plots.h"
+#include "engine/run/Output.h"
+#include "engine/run/RefedProgram.h"
+#include "engine/run/StepsTable.h"
+#include "engine/run/StockFiles.h"
+#include "engine/units/Quantity.h"
+
+#include <cstdio>
+#include <future>
+
+namespace engage {
+namespace {
+
+PlotSpec plotSpec(const RunResult& result, const std::filesystem::path& dir) {
+  const UnitSystem sys = result.job.units;
+  PlotSpec ps;
+  ps.folder = dir.string();
+  ps.length = unitTag(Dimension::Length, sys);
+  ps.feed = unitTag(Dimension::Feed, sys);
+  ps.rate = unitTag(Dimension::VolumeRate, sys);
+  ps.accelerationTag = unitTag(Dimension::Acceleration, sys);
+  ps.lengthLabel = unitLabel(Dimension::Length, sys);
+  ps.feedLabel = unitLabel(Dimension::Feed, sys);
+  ps.rateLabel = unitLabel(Dimension::VolumeRate, sys);
+  ps.accelerationLabel = unitLabel(Dimension::Acceleration, sys);
+  ps.schedule = result.job.scheduling();
+  ps.accelerationLimit = toDisplay(result.job.schedule.acceleration, Dimension::Acceleration, sys);
+  return ps;
+}
+
+}  // namespace
+
+WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::path& dir) {
+  WrittenOutputs w;
+  writeAtomically(dir / "steps.csv", stepsTable(result));
+  writeAtomically(dir / "summary.json", summaryJson(result));
+  writeRefedProgram(result, dir);
+  w.refedProgram = result.job.scheduling();
+  // gnuplot draws in its own process while the stock files are written (seconds each on a
+  // fine grid); its outcome is collected below.
+  const PlotSpec ps = plotSpec(result, dir);
+  auto plots = std::async(std::launch::async, [&ps] { return writePlots(ps); });
+  w.openEdges = writeStockFiles(result, dir);
+  try {
+    for (const std::string& f : plots.get())
+      if (f.size() > 4 && f.compare(f.size() - 4, 4, ".png") == 0) w.plots.push_back(f);
+  } catch (const Error& e) {
+    std::fprintf(stderr, "engage: warning: plots not drawn: %s\n", e.what());
+  }
+  return w;
+}
+
+CompletedRun runIntoFolder(Job job) {
+  PreparedRun prepared = prepareRun(std::move(job));
+  OutputDirectory outputs(prepared.job.out);
+  const ProgressFunction progress =
+      terminalProgress(prepared.job.progressLabel, prepared.job.quiet);
+  CompletedRun run;
+  run.result = executeRun(std::move(prepared), progress);
+  run.written = writeRunOutputs(run.result, run.result.job.out);
+  outputs.keep();
+  return run;
+}
+
+}  // namespace engage

@@ -1,0 +1,69 @@
+#include "engine/run/StepsTable.h"
+
+#include "engine/model/EngagementModel.h"
+#include "engine/units/Quantity.h"
+
+namespace engage {
+namespace {
+
+const char* sideName(PathSide s) {
+  return s == PathSide::Concave ? "concave" : s == PathSide::Convex ? "convex" : "straight";
+}
+
+}  // namespace
+
+double scheduledAcceleration(const RunResult& result, std::size_t i) {
+  const auto& steps = result.sim.steps;
+  if (i == 0 || steps[i].kind == MoveKind::Rapid || steps[i - 1].kind == MoveKind::Rapid)
+    return 0.0;
+  return tangentialAcceleration(result.plan.feed[i - 1], result.plan.feed[i], steps[i].length);
+}
+
+std::string stepsTable(const RunResult& result) {
+  const UnitSystem sys = result.job.units;
+  const bool schedule = result.job.scheduling();
+  const bool cross = result.crossChecked;
+  const std::string other = stockModelName(result.job.otherModel());
+  const std::string L(unitTag(Dimension::Length, sys));
+  const std::string F(unitTag(Dimension::Feed, sys));
+  const std::string V(unitTag(Dimension::Volume, sys));
+  const std::string Q(unitTag(Dimension::VolumeRate, sys));
+  const std::string A(unitTag(Dimension::Acceleration, sys));
+  auto D = [&](double v, Dimension d) { return formatNumber(toDisplay(v, d, sys)); };
+  std::string csv =
+      "step,move,line,kind,arc_length_" + L + ",x_" + L + ",y_" + L + ",z_" + L + ",feed_" + F +
+      ",dt_s,removed_" + V + ",mrr_" + Q + ",width_" + L + ",depth_" + L +
+      ",engagement_deg,curvature_1_" + L + ",path,mrr_exact_" + Q + ",mrr_paper_" + Q +
+      ",voxels_changed" +
+      (schedule ? ",feed_scheduled_" + F + ",binding,mrr_scheduled_" + Q + ",acceleration_" + A
+                : std::string()) +
+      (cross ? ",removed_" + other + "_" + V + ",cross_check" : std::string()) + "\n";
+  const auto& steps = result.sim.steps;
+  const Schedule& plan = result.plan;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const StepRecord& s = steps[i];
+    csv +=
+        std::to_string(i) + "," + std::to_string(s.move) + "," + std::to_string(s.line) + "," +
+        moveKindName(s.kind) + "," + D(s.arcLength, Dimension::Length) + "," +
+        D(s.end.x(), Dimension::Length) + "," + D(s.end.y(), Dimension::Length) + "," +
+        D(s.end.z(), Dimension::Length) + "," + D(s.feed, Dimension::Feed) + "," +
+        formatNumber(s.dt) + "," + D(s.removed, Dimension::Volume) + "," +
+        D(s.mrr, Dimension::VolumeRate) + "," + D(s.width, Dimension::Length) + "," +
+        D(s.depth, Dimension::Length) + "," + formatNumber(s.engagementRad * 57.29577951308232) +
+        "," + formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," +
+        sideName(s.side) + "," + D(s.mrrExact, Dimension::VolumeRate) + "," +
+        D(s.mrrPaper, Dimension::VolumeRate) + "," + std::to_string(s.voxelsChanged) +
+        (schedule
+             ? "," + D(plan.feed[i], Dimension::Feed) + "," + bindingName(plan.binding[i]) + "," +
+                   D(s.feed > 0 ? s.mrr * plan.feed[i] / s.feed : 0.0, Dimension::VolumeRate) +
+                   "," + D(scheduledAcceleration(result, i), Dimension::Acceleration)
+             : std::string()) +
+        (cross ? "," + D(result.cross.other.steps[i].removed, Dimension::Volume) +
+                     (result.cross.differs[i] ? ",differs" : ",agrees")
+               : std::string()) +
+        "\n";
+  }
+  return csv;
+}
+
+}  // namespace engage

@@ -1,0 +1,21 @@
+#pragma once
+/// \file StepsTable.h
+/// steps.csv: one row per step of a run, in the run's report units (the unit in each column
+/// name): where it is, the programmed feed, the measured removal, MRR and engagement, the
+/// analytic model's MRR (exact and paper form), and for a schedule the scheduled feed, what
+/// bound it and Eq 24's acceleration; for a cross-check the other model's removal.
+
+#include "engine/run/Pipeline.h"
+
+#include <string>
+
+namespace engage {
+
+/// The table's text (header and rows).
+std::string stepsTable(const RunResult& result);
+
+/// Eq 24's tangential acceleration between step i-1 and step i with the scheduled feeds,
+/// mm/s^2 (0 at the first step and next to rapids).
+double scheduledAcceleration(const RunResult& result, std::size_t i);
+
+}  // namespace engage

@@ -1,0 +1,258 @@
+#include "engine/run/Summary.h"
+
+#include "engine/units/Quantity.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+
+namespace engage {
+namespace {
+
+using nlohmann::ordered_json;
+
+ordered_json num(double v) {
+  return std::isfinite(v) ? ordered_json(v) : ordered_json(nullptr);
+}
+
+ordered_json agreement(const Agreement& a) {
+  return ordered_json{{"steps", a.steps},
+                      {"mean_relative", num(a.meanRelative)},
+                      {"max_relative", num(a.maxRelative)}};
+}
+
+/// printf into a string.
+template <typename... Args>
+void appendf(std::string& out, const char* format, Args... args) {
+  char buf[1024];
+  std::snprintf(buf, sizeof buf, format, args...);
+  out += buf;
+}
+
+ordered_json crossCheckJson(const RunResult& result) {
+  const Job& job = result.job;
+  const UnitSystem sys = job.units;
+  const CrossCheck& c = result.cross;
+  const auto& steps = result.sim.steps;
+  const std::string other = stockModelName(job.otherModel());
+  ordered_json places = ordered_json::array();
+  for (std::size_t k = 0; k < c.differing.size() && k < 20; ++k) {
+    const std::size_t i = c.differing[k];
+    places.push_back(
+        {{"step", i},
+         {"line", steps[i].line},
+         {"removed", toDisplay(steps[i].removed, Dimension::Volume, sys)},
+         {"removed_" + other, toDisplay(c.other.steps[i].removed, Dimension::Volume, sys)}});
+  }
+  const double removed = result.sim.removed;
+  return {{"model", stockModelName(job.stockModel)},
+          {"other_model", other},
+          {"tolerance_relative", job.crossTolerance},
+          {"floor_volume", toDisplay(c.floorVolume, Dimension::Volume, sys)},
+          {"steps", steps.size()},
+          {"steps_differing", c.differing.size()},
+          {"worst_relative", c.worstRelative},
+          {"removed_" + other, toDisplay(c.other.removed, Dimension::Volume, sys)},
+          {"removed_relative_difference", removed > 0 ? c.other.removed / removed - 1.0 : 0.0},
+          {"run_time_" + other + "_s", c.other.seconds},
+          {"memory_bytes_" + other, c.otherMemoryBytes},
+          {"largest_differences", places}};
+}
+
+ordered_json scheduleJson(const RunResult& result) {
+  const UnitSystem sys = result.job.units;
+  const ScheduleOptions& sched = result.job.schedule;
+  const Schedule& plan = result.plan;
+  const auto& steps = result.sim.steps;
+  std::map<std::string, std::size_t> counts;
+  ordered_json places = ordered_json::array();
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    if (plan.binding[i] == Binding::None || steps[i].kind == MoveKind::Rapid) continue;
+    ++counts[bindingName(plan.binding[i])];
+    if (places.size() < 50 && (i == 0 || plan.binding[i - 1] != plan.binding[i]))
+      places.push_back(
+          {{"step", i}, {"line", steps[i].line}, {"limit", bindingName(plan.binding[i])}});
+  }
+  double mrrBefore = 0.0, peakBefore = 0.0, peakAfter = 0.0, meanAfter = 0.0;
+  std::size_t cutting = 0;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const StepRecord& s = steps[i];
+    // Without a stock the statistics are the analytic model's.
+    const double load = result.stock ? s.mrr : s.mrrExact;
+    if (s.kind == MoveKind::Rapid || !(load > 0.0) || plan.binding[i] == Binding::Air) continue;
+    // The removal per unit length does not depend on the feed: the MRR scales with it.
+    const double after = load * plan.feed[i] / s.feed;
+    mrrBefore += load;
+    meanAfter += after;
+    peakBefore = std::max(peakBefore, load);
+    peakAfter = std::max(peakAfter, after);
+    ++cutting;
+  }
+  const double n = static_cast<double>(std::max<std::size_t>(cutting, 1));
+  auto rate = [&](double v) { return toDisplay(v, Dimension::VolumeRate, sys); };
+  return {{"target_mrr", rate(plan.targetMrr)},
+          {"acceleration_limit", num(toDisplay(sched.acceleration, Dimension::Acceleration, sys))},
+          {"max_acceleration", toDisplay(plan.maxAcceleration, Dimension::Acceleration, sys)},
+          {"jerk_limit", num(toDisplay(sched.jerk, Dimension::Jerk, sys))},
+          {"feed_time_before_s", plan.timeBefore},
+          {"feed_time_after_s", plan.timeAfter},
+          {"rapid_feed", num(toDisplay(sched.rapidFeed, Dimension::Feed, sys))},
+          {"rapid_time_s", plan.rapidTime},
+          {"cycle_time_before_s", plan.timeBefore + plan.rapidTime},
+          {"cycle_time_after_s", plan.timeAfter + plan.rapidTime},
+          {"saving_relative", plan.timeBefore > 0 ? 1.0 - plan.timeAfter / plan.timeBefore : 0.0},
+          {"mrr_mean_before", rate(mrrBefore / n)},
+          {"mrr_mean_after", rate(meanAfter / n)},
+          {"mrr_peak_before", rate(peakBefore)},
+          {"mrr_peak_after", rate(peakAfter)},
+          {"feed_pieces", plan.fWords},
+          {"steps_limited", counts},
+          {"limited_places", places}};
+}
+
+}  // namespace
+
+std::string summaryJson(const RunResult& result) {
+  const Job& job = result.job;
+  const UnitSystem sys = job.units;
+  const SimulationResult& r = result.sim;
+  const std::size_t peak = result.peakStep;
+  ordered_json j;
+  j["program"] = job.program;
+  j["units"] = std::string(systemName(sys));
+  j["tool"] = job.toolText;
+  j["stock"] = job.stock.text;
+  j["voxel"] = toDisplay(job.voxel, Dimension::Length, sys);
+  const double step = job.simulation.stepLength;
+  j["step_length"] = toDisplay(step > 0 ? step : 2.5 * job.voxel, Dimension::Length, sys);
+  j["moves"] = job.path.moves.size();
+  j["steps"] = r.steps.size();
+  j["volume_before"] = toDisplay(r.volumeBefore, Dimension::Volume, sys);
+  j["volume_after"] = toDisplay(r.volumeAfter, Dimension::Volume, sys);
+  j["removed"] = toDisplay(r.removed, Dimension::Volume, sys);
+  j["removed_vs_stock_change_relative"] =
+      r.removed > 0 ? std::abs(r.removed - (r.volumeBefore - r.volumeAfter)) / r.removed : 0.0;
+  j["removed_by_rapids"] = toDisplay(r.rapidRemoved, Dimension::Volume, sys);
+  j["cutting_time_s"] = r.cuttingTime;
+  j["run_time_s"] = r.seconds;
+  j["steps_per_second"] = r.seconds > 0 ? static_cast<double>(r.steps.size()) / r.seconds : 0.0;
+  j["stock_model"] = result.stock ? std::string(stockModelName(job.stockModel)) : "none";
+  j["stock_memory_bytes"] = result.stock ? result.stock->memoryBytes() : std::size_t(0);
+  j["voxels_changed"] = r.voxelsChanged;
+  j["voxels_changed_per_second"] =
+      r.seconds > 0 ? static_cast<double>(r.voxelsChanged) / r.seconds : 0.0;
+  j["peak_mrr"] =
+      r.steps.empty()
+          ? ordered_json(nullptr)
+          : ordered_json{{"value", toDisplay(r.steps[peak].mrr, Dimension::VolumeRate, sys)},
+                         {"step", peak},
+                         {"line", r.steps[peak].line}};
+  j["agreement_exact"] = {{"straight", agreement(r.straight)},
+                          {"concave", agreement(r.concave)},
+                          {"convex", agreement(r.convex)}};
+  j["agreement_paper"] = {{"straight", agreement(r.straightPaper)},
+                          {"concave", agreement(r.concavePaper)},
+                          {"convex", agreement(r.convexPaper)}};
+  ordered_json largest = ordered_json::array();
+  for (const Difference& d : r.largest)
+    largest.push_back({{"step", d.step},
+                       {"line", d.line},
+                       {"measured", toDisplay(d.measured, Dimension::VolumeRate, sys)},
+                       {"analytic", toDisplay(d.analytic, Dimension::VolumeRate, sys)},
+                       {"relative", d.relative}});
+  j["largest_differences"] = largest;
+  if (result.crossChecked) j["cross_check"] = crossCheckJson(result);
+  j["unit_labels"] = {{"length", std::string(unitLabel(Dimension::Length, sys))},
+                      {"volume", std::string(unitLabel(Dimension::Volume, sys))},
+                      {"mrr", std::string(unitLabel(Dimension::VolumeRate, sys))},
+                      {"feed", std::string(unitLabel(Dimension::Feed, sys))}};
+  if (job.scheduling()) j["schedule"] = scheduleJson(result);
+  return j.dump(2) + "\n";
+}
+
+std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutputs& written) {
+  std::vector<std::string> w;
+  if (result.sim.rapidRemoved > 0.0)
+    w.push_back("rapids removed " +
+                formatQuantity(result.sim.rapidRemoved, Dimension::Volume, result.job.units) +
+                " of material (a crash on a machine)");
+  if (written.openEdges > 0)
+    w.push_back("stock.stl has " + std::to_string(written.openEdges) + " open edges");
+  return w;
+}
+
+std::string runReport(const RunResult& result, const WrittenOutputs& written) {
+  const Job& job = result.job;
+  const UnitSystem sys = job.units;
+  const SimulationResult& r = result.sim;
+  const Schedule& plan = result.plan;
+  auto q = [&](double v, Dimension d) { return formatQuantity(v, d, sys); };
+  std::string report;
+  appendf(report, "%zu moves, %zu steps in %.2f s (%.0f steps/s)\n", job.path.moves.size(),
+          r.steps.size(), r.seconds,
+          r.seconds > 0 ? static_cast<double>(r.steps.size()) / r.seconds : 0.0);
+  if (!result.stock)
+    appendf(report,
+            "no stock: every feed step cut at stepover %s and depth %s, the stock on the %s of "
+            "the path (the paper's analytic model)\n",
+            q(*job.simulation.stepover, Dimension::Length).c_str(),
+            q(*job.simulation.depth, Dimension::Length).c_str(),
+            job.materialOnRight ? "right" : "left");
+  else {
+    const std::size_t peak = result.peakStep;
+    appendf(report, "removed %s (stock %s -> %s), peak MRR %s at line %d\n",
+            q(r.removed, Dimension::Volume).c_str(), q(r.volumeBefore, Dimension::Volume).c_str(),
+            q(r.volumeAfter, Dimension::Volume).c_str(),
+            r.steps.empty() ? "0" : q(r.steps[peak].mrr, Dimension::VolumeRate).c_str(),
+            r.steps.empty() ? 0 : r.steps[peak].line);
+    appendf(report,
+            "measured vs analytic (exact) on steady steps: straight %zu steps mean %.2f %%, "
+            "concave %zu "
+            "mean %.2f %%, convex %zu mean %.2f %%\n",
+            r.straight.steps, 100 * r.straight.meanRelative, r.concave.steps,
+            100 * r.concave.meanRelative, r.convex.steps, 100 * r.convex.meanRelative);
+  }
+  if (result.crossChecked) {
+    const CrossCheck& c = result.cross;
+    const std::string other = stockModelName(job.otherModel());
+    appendf(
+        report,
+        "cross-check against the %s stock: %zu of %zu steps differ by more than %.1f %% "
+        "(worst %.2f %%%s), total removed differs by %.3f %% (%s run %.2f s)\n",
+        other.c_str(), c.differing.size(), r.steps.size(), 100 * job.crossTolerance,
+        100 * c.worstRelative,
+        c.differing.empty()
+            ? ""
+            : (", largest at line " + std::to_string(r.steps[c.differing.front()].line)).c_str(),
+        r.removed > 0 ? 100 * (c.other.removed / r.removed - 1.0) : 0.0, other.c_str(),
+        c.other.seconds);
+  }
+  for (const std::string& w : runWarnings(result, written))
+    report += "warning: " + w + "\n";
+  if (job.scheduling())
+    appendf(
+        report,
+        "schedule: target %s, feed time %.1f s -> %.1f s (%.1f %% %s), largest acceleration %s, "
+        "%zu feed pieces\n",
+        q(plan.targetMrr, Dimension::VolumeRate).c_str(), plan.timeBefore, plan.timeAfter,
+        plan.timeBefore > 0 ? std::abs(100.0 * (1.0 - plan.timeAfter / plan.timeBefore)) : 0.0,
+        plan.timeAfter <= plan.timeBefore ? "saved" : "longer",
+        q(plan.maxAcceleration, Dimension::Acceleration).c_str(), plan.fWords);
+  if (job.scheduling() && plan.rapidTime > 0.0)
+    appendf(report, "cycle time with rapids: %.1f s -> %.1f s (rapids %.1f s)\n",
+            plan.timeBefore + plan.rapidTime, plan.timeAfter + plan.rapidTime, plan.rapidTime);
+  std::string plotted, programName;
+  for (const std::string& f : written.plots)
+    plotted += "," + f;
+  if (written.refedProgram)
+    programName = "," + std::filesystem::path(job.program).filename().string();
+  appendf(report, "wrote %s/{steps.csv,summary.json%s%s%s}\n", job.out.c_str(),
+          result.stock ? ",removed.vdb,stock.vdb,stock.stl" : "", programName.c_str(),
+          plotted.c_str());
+  return report;
+}
+
+}  // namespace engage

@@ -1,0 +1,31 @@
+#pragma once
+/// \file Summary.h
+/// summary.json: the run's figures in its report units (unit labels under "unit_labels"):
+/// program, tool, stock, resolution, volumes, times, peak MRR with its step and line, the
+/// agreement of measurement and analytic model per path class, the cross-check and the
+/// schedule. Also the handful of lines `engage simulate` prints.
+
+#include "engine/run/Pipeline.h"
+
+#include <string>
+#include <vector>
+
+namespace engage {
+
+/// The JSON text of summary.json (two-space indent, a final newline).
+std::string summaryJson(const RunResult& result);
+
+/// What writing the outputs made, for the report lines.
+struct WrittenOutputs {
+  std::vector<std::string> plots;  ///< PNG files drawn (names without the folder)
+  std::size_t openEdges = 0;       ///< open edges of stock.stl (0: closed)
+  bool refedProgram = false;       ///< the re-fed program was written
+};
+
+/// The lines `engage simulate` prints (each ending in a newline; warnings start "warning: ").
+std::string runReport(const RunResult& result, const WrittenOutputs& written);
+
+/// The warnings of a run, without the "warning: " prefix (rapids that cut, an open mesh).
+std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutputs& written);
+
+}  // namespace engage
