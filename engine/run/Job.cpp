@@ -80,9 +80,13 @@ StockSpec parseStock(const std::string& text, UnitSystem sys) {
 /// The schedule's settings (schedule jobs only).
 ScheduleOptions scheduleOptions(const OptionValues& values, UnitSystem sys, double diameter) {
   auto text = [&](const char* name) { return optionText(values, name); };
+  // Limits and feeds: none is negative (0 means "none" or "the programmed").
   auto quantity = [&](const char* name, Dimension d) {
     const std::string t = text(name);
-    return t.empty() ? 0.0 : parseQuantity(t, d, sys, "--" + std::string(name)).value;
+    const double v = t.empty() ? 0.0 : parseQuantity(t, d, sys, "--" + std::string(name)).value;
+    if (v < 0.0)
+      throw ParameterError("--" + std::string(name) + " must not be negative, found '" + t + "'");
+    return v;
   };
   ScheduleOptions s;
   const std::string target = text("target-mrr");

@@ -1,0 +1,123 @@
+// Tests of engine/run/Job.h: the typed job that makeJob reads from option values, and its one
+// validation, whose errors name the option and the value.
+
+#include "engine/run/Job.h"
+
+#include "cutters/Error.h"
+#include "tests/engine/run/RunTestSupport.h"
+
+#include <catch2/catch.hpp>
+
+#include <string>
+
+using namespace engage;
+
+namespace {
+
+OptionValues slotJob(const std::string& program) {
+  return {{"program", program},
+          {"tool", "flat"},
+          {"diameter", "6mm"},
+          {"stock", "box:40,-10,0,-10,10,-10"}};
+}
+
+/// The message makeJob throws for these values, or "" when it accepts them.
+std::string errorOf(JobCommand command, const OptionValues& values) {
+  try {
+    makeJob(command, values);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("makeJob types every option in internal units", "[run]") {
+  test::TempFolder dir("job_typed");
+  const std::string program = dir.write("slot.ngc", test::slotProgram());
+  OptionValues v = slotJob(program);
+  Job job = makeJob(JobCommand::Simulate, v);
+  CHECK(job.units == UnitSystem::Metric);
+  CHECK(job.cutter.radius() == Approx(3.0).epsilon(1e-12));
+  // Default voxel: D / 20 = 0.3 mm; default flutes 2.
+  CHECK(job.voxel == Approx(0.3).epsilon(1e-12));
+  CHECK(job.cutter.fluteCount() == 2);
+  // The box's corners are ordered, whatever order they were typed in.
+  REQUIRE(job.stock.box);
+  CHECK(job.stock.box->min.x() == -10.0);
+  CHECK(job.stock.box->max.x() == 40.0);
+  CHECK(job.stock.box->min.z() == -10.0);
+  CHECK(job.stock.box->max.z() == 0.0);
+  CHECK(job.path.moves.size() == 4);
+  CHECK_FALSE(job.scheduling());
+
+  // --units in: bare numbers are inches (0.01 in = 0.254 mm), suffixed ones keep their unit.
+  v["units"] = "in";
+  v["voxel"] = "0.01";
+  v["step"] = "0.5mm";
+  job = makeJob(JobCommand::Simulate, v);
+  CHECK(job.units == UnitSystem::Inch);
+  CHECK(job.voxel == Approx(0.254).epsilon(1e-12));
+  CHECK(job.simulation.stepLength == Approx(0.5).epsilon(1e-12));
+
+  // Schedule settings: 0.3 g = 0.3 * 9806.65 mm/s^2; 1000 mm3/min; the default min-change.
+  OptionValues s = slotJob(program);
+  s["target-mrr"] = "1000mm3/min";
+  s["accel"] = "0.3g";
+  s["jerk"] = "50000mm/s3";
+  s["rapid-feed"] = "10000mm/min";
+  job = makeJob(JobCommand::Schedule, s);
+  CHECK(job.schedule.targetMrr == Approx(1000.0).epsilon(1e-12));
+  CHECK(job.schedule.acceleration == Approx(0.3 * 9806.65).epsilon(1e-12));
+  CHECK(job.schedule.jerk == Approx(50000.0).epsilon(1e-12));
+  CHECK(job.schedule.rapidFeed == Approx(10000.0).epsilon(1e-12));
+  CHECK(job.schedule.minChange == Approx(0.05).epsilon(1e-12));
+}
+
+TEST_CASE("makeJob refuses bad values, naming the option and the value", "[run]") {
+  test::TempFolder dir("job_errors");
+  const std::string program = dir.write("slot.ngc", test::slotProgram());
+  auto with = [&](const std::string& key, const std::string& value) {
+    OptionValues v = slotJob(program);
+    v[key] = value;
+    return v;
+  };
+  using Catch::Matchers::Contains;
+  const JobCommand sim = JobCommand::Simulate, sched = JobCommand::Schedule;
+  CHECK(errorOf(sim, slotJob(program)).empty());
+  CHECK_THAT(errorOf(sim, with("voxle", "1")), Contains("unknown option \"voxle\""));
+  CHECK_THAT(errorOf(sim, with("voxel", "abc")), Contains("--voxel: expected a length"));
+  CHECK_THAT(errorOf(sim, with("voxel", "abc")), Contains("'abc'"));
+  CHECK_THAT(errorOf(sim, with("voxel", "-1mm")), Contains("--voxel must be positive"));
+  CHECK_THAT(errorOf(sim, with("stock-model", "cubes")),
+             Contains("--stock-model: expected voxel or dexel, found 'cubes'"));
+  CHECK_THAT(errorOf(sim, with("flutes", "2.5")),
+             Contains("--flutes: expected a whole number, found '2.5'"));
+  CHECK_THAT(errorOf(sim, with("cross-check", "yes")),
+             Contains("--cross-check: expected true or false, found 'yes'"));
+  CHECK_THAT(errorOf(sim, with("target-mrr", "5")),
+             Contains("--target-mrr applies to schedule jobs only"));
+  CHECK_THAT(errorOf(sched, with("min-change", "2")),
+             Contains("--min-change: expected a fraction in (0, 1), found 2"));
+  CHECK_THAT(errorOf(sched, with("jerk", "-5mm/s3")),
+             Contains("--jerk must not be negative, found '-5mm/s3'"));
+  CHECK_THAT(errorOf(sched, with("feed-min", "-1")),
+             Contains("--feed-min must not be negative, found '-1'"));
+  CHECK_THAT(errorOf(sim, with("stock", "box:0,0,-10")),
+             Contains("expected box:X0,Y0,Z0,X1,Y1,Z1 (six numbers), found 3"));
+  CHECK_THAT(errorOf(sim, with("diameter", "")), Contains("--diameter is required"));
+  CHECK_THAT(errorOf(sim, with("corner-radius", "1mm")),
+             Contains("--corner-radius does not apply to a flat cutter"));
+  OptionValues noStock = slotJob(program);
+  noStock.erase("stock");
+  CHECK_THAT(errorOf(sim, noStock), Contains("--stock is required"));
+  // Without a stock only the analytic schedule runs, and then the stock's side may be given.
+  noStock["model"] = "analytic";
+  noStock["material-side"] = "left";
+  CHECK(errorOf(sched, noStock).empty());
+  CHECK_THAT(errorOf(sched, with("material-side", "left")),
+             Contains("--material-side applies without --stock"));
+  CHECK_THAT(errorOf(sim, with("program", dir.path().string() + "/none.ngc")),
+             Contains("none.ngc"));
+}

@@ -1,0 +1,130 @@
+// Tests of engine/run/Pipeline.h and the writers it feeds (StepsTable.h, Summary.h,
+// RunOutputs.h) on a slot whose removal is known in closed form.
+
+#include "engine/run/Pipeline.h"
+
+#include "cutters/Error.h"
+#include "engine/run/RunOutputs.h"
+#include "engine/run/StepsTable.h"
+#include "engine/run/Summary.h"
+#include "tests/engine/run/RunTestSupport.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+using namespace engage;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+OptionValues slotJob(const std::string& program) {
+  return {{"program", program},
+          {"tool", "flat"},
+          {"diameter", "6mm"},
+          {"stock", "box:-10,-10,-10,40,10,0"}};
+}
+
+std::size_t lineCount(const std::string& text) {
+  return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+}  // namespace
+
+TEST_CASE("the pipeline measures a slot as its closed form", "[run]") {
+  test::TempFolder dir("pipeline_slot");
+  const std::string program = dir.write("slot.ngc", test::slotProgram());
+  const RunResult r = runJob(makeJob(JobCommand::Simulate, slotJob(program)));
+  REQUIRE(r.stock);
+  // The slot: the stadium 30 x 6 mm plus a 3 mm disc, 2 mm deep. The voxel stock is within
+  // 0.5 % per step of closed forms at the default voxel (README, accuracy); the total of a
+  // flat slot far tighter: 0.2 % allows for the rim of 0.3 mm voxels.
+  const double slot = (30.0 * 6.0 + kPi * 9.0) * 2.0;
+  CHECK(r.sim.removed == Approx(slot).epsilon(0.002));
+  // The steady MRR D d F = 7200 mm^3/min at the step of the peak (the plunge is slower).
+  CHECK(r.sim.steps[r.peakStep].mrr == Approx(7200.0).epsilon(0.005));
+  CHECK_FALSE(r.crossChecked);
+  CHECK(r.plan.feed.empty());
+
+  // The writers: one row per step plus the header, columns in the run's units.
+  const std::string csv = stepsTable(r);
+  CHECK(lineCount(csv) == r.sim.steps.size() + 1);
+  CHECK(csv.rfind("step,move,line,kind,arc_length_mm,x_mm,", 0) == 0);
+  const auto summary = nlohmann::json::parse(summaryJson(r));
+  CHECK(summary["removed"].get<double>() == Approx(r.sim.removed).epsilon(1e-12));
+  CHECK(summary["peak_mrr"]["line"].get<int>() == r.sim.steps[r.peakStep].line);
+  CHECK(summary["stock_model"] == "voxel");
+  CHECK_FALSE(summary.contains("schedule"));
+}
+
+TEST_CASE("the pipeline in inches reports inches", "[run]") {
+  test::TempFolder dir("pipeline_inch");
+  const std::string program = dir.write("slot.ngc", test::slotProgram());
+  OptionValues v = slotJob(program);
+  v["units"] = "in";
+  v["stock"] = "box:-10mm,-10mm,-10mm,40mm,10mm,0mm";
+  const RunResult r = runJob(makeJob(JobCommand::Simulate, v));
+  const auto summary = nlohmann::json::parse(summaryJson(r));
+  CHECK(summary["units"] == "in");
+  // 1 in^3 = 25.4^3 mm^3.
+  CHECK(summary["removed"].get<double>() ==
+        Approx(r.sim.removed / (25.4 * 25.4 * 25.4)).epsilon(1e-12));
+  CHECK(stepsTable(r).rfind("step,move,line,kind,arc_length_in,", 0) == 0);
+}
+
+TEST_CASE("the pipeline cross-checks and schedules", "[run]") {
+  test::TempFolder dir("pipeline_schedule");
+  const std::string program = dir.write("slot.ngc", test::slotProgram());
+  OptionValues v = slotJob(program);
+  v["cross-check"] = "true";
+  // Half the steady MRR: the slot's steady feed halves, 600 -> 300 mm/min (d D F = 3600).
+  v["target-mrr"] = "3600mm3/min";
+  const RunResult r = runJob(makeJob(JobCommand::Schedule, v));
+  REQUIRE(r.crossChecked);
+  REQUIRE(r.cross.other.steps.size() == r.sim.steps.size());
+  // Both stock models are within 0.5 % of a slot's closed form: no step differs by 3 %.
+  CHECK(r.cross.differing.empty());
+  CHECK(r.cross.other.removed == Approx(r.sim.removed).epsilon(0.005));
+  REQUIRE(r.plan.feed.size() == r.sim.steps.size());
+  // The steady steps of the slot: the middle third of the 30 mm, far from entry and exit.
+  std::size_t steady = 0;
+  for (std::size_t i = 0; i < r.sim.steps.size(); ++i) {
+    const StepRecord& s = r.sim.steps[i];
+    if (s.kind != MoveKind::Line || s.feed != 600.0 || s.end.x() < 10.0 || s.end.x() > 20.0)
+      continue;
+    ++steady;
+    // The scheduled feed sits on a level no more than min-change (5 %) below the wanted one.
+    CHECK(r.plan.feed[i] <= 300.0 * 1.0001);
+    CHECK(r.plan.feed[i] >= 300.0 * 0.95);
+  }
+  CHECK(steady > 10);
+  CHECK(r.refed.find("F") != std::string::npos);
+  const auto summary = nlohmann::json::parse(summaryJson(r));
+  CHECK(summary["schedule"]["target_mrr"].get<double>() == Approx(3600.0).epsilon(1e-12));
+  CHECK(summary["cross_check"]["other_model"] == "dexel");
+}
+
+TEST_CASE("runIntoFolder writes every file, and a refused job writes none", "[run]") {
+  test::TempFolder dir("pipeline_folder");
+  const std::string program = dir.write("slot.ngc", test::slotProgram());
+  OptionValues v = slotJob(program);
+  v["out"] = (dir.path() / "out").string();
+  v["quiet"] = "true";
+  const CompletedRun run = runIntoFolder(makeJob(JobCommand::Simulate, v));
+  for (const char* f : {"steps.csv", "summary.json", "removed.vdb", "stock.vdb", "stock.stl"})
+    CHECK(std::filesystem::exists(dir.path() / "out" / f));
+  CHECK(run.written.openEdges == 0);
+  CHECK(runReport(run.result, run.written).find("removed ") != std::string::npos);
+
+  // A stock the path never reaches: refused before the output folder is made.
+  v["stock"] = "box:500,500,-10,560,560,0";
+  v["out"] = (dir.path() / "refused").string();
+  CHECK_THROWS_WITH(runIntoFolder(makeJob(JobCommand::Simulate, v)),
+                    Catch::Matchers::Contains("the tool path never reaches the stock"));
+  CHECK_FALSE(std::filesystem::exists(dir.path() / "refused"));
+}
