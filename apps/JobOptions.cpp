@@ -5,10 +5,10 @@
 namespace engage::app {
 namespace {
 
-/// The CLI11 side of one table entry bound to `target`.
+/// The CLI11 side of one table entry bound to `target`. Values are checked by makeJob, the
+/// one validation of all front ends, so that its messages are the same everywhere.
 CLI::Option* addOption(CLI::App& cmd, const OptionInfo& o, std::string& target) {
   CLI::Option* opt = cmd.add_option("--" + o.name, target, o.help);
-  if (o.kind == OptionKind::Choice) opt->check(CLI::IsMember(o.choices));
   if (!o.defaultText.empty()) opt->capture_default_str();
   return opt;
 }
@@ -47,6 +47,8 @@ void addToolOptions(CLI::App& cmd, ToolOptions& t, bool required) {
       continue;
     }
     CLI::Option* opt = addOption(cmd, o, *fields.at(o.name));
+    // analyze reads the cutter without makeJob: CLI11 checks the choices there.
+    if (o.kind == OptionKind::Choice) opt->check(CLI::IsMember(o.choices));
     if (required && o.required) opt->required();
   }
 }

@@ -5,6 +5,7 @@ packages=(
   cmake make g++ ccache
   libeigen3-dev libtbb-dev libopenvdb-dev libopenvdb-tools zlib1g-dev libboost-iostreams-dev
   libopenmesh-dev libcli11-dev nlohmann-json3-dev libpolyclipping-dev catch2 gnuplot-nox
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,0 +1,141 @@
+"""Tests of the Python module `engage` (apps/python/EngageModule.cpp), run by ctest.
+
+Expected values are closed forms written next to each case. ENGAGE_BIN (set by ctest) is the
+command line, whose messages the module's errors must repeat."""
+import json
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import engage
+
+SLOT = "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z-2 F100\nG1 X30 F600\nG0 Z5\nM2\n"
+BOX = "box:-10,-10,-10,40,10,0"
+
+
+@pytest.fixture
+def slot(tmp_path):
+    p = tmp_path / "slot.ngc"
+    p.write_text(SLOT)
+    return str(p)
+
+
+def test_cross_section_and_model_closed_forms():
+    c = engage.Cutter.flat(6.0, 18.0)
+    # A flat end mill at s = 3, d = 2: a 3 x 2 rectangle from the axis out to r.
+    x = engage.cross_section(c, 3.0, 2.0)
+    assert x["area_mm2"] == pytest.approx(6.0, rel=1e-12)
+    assert x["centroid_x_mm"] == pytest.approx(1.5, rel=1e-12)
+    assert x["centroid_z_mm"] == pytest.approx(1.0, rel=1e-12)
+    m = engage.Model(c, stepover=3.0, depth=2.0)
+    # Eq 6: s d V_f = 3 * 2 * 600.
+    assert m.mrr(600.0) == pytest.approx(3600.0, rel=1e-12)
+    # Concave arc of tool-centre radius 10: centroid at 10 + 1.5 (Pappus), 3600 * 11.5 / 10.
+    assert m.mrr(600.0, "concave", 10.0) == pytest.approx(4140.0, rel=1e-12)
+    assert m.mrr(600.0, "convex", 10.0) == pytest.approx(3600.0 * 8.5 / 10.0, rel=1e-12)
+    # Inverse of Eq 6: the feed for 1800 mm^3/min is 300 mm/min.
+    assert m.adaptive_feed(1800.0) == pytest.approx(300.0, rel=1e-12)
+    # A ball's width at height z: sqrt(r^2 - (r - z)^2); r = 3, z = 1 -> sqrt(5).
+    assert engage.Cutter.ball(6.0, 18.0).radius_at(1.0) == pytest.approx(math.sqrt(5.0))
+    # Eq 17, 18, 24.
+    assert engage.cutting_speed(10.0, 1000.0) == pytest.approx(math.pi * 10.0 * 1000.0)
+    assert engage.tangential_acceleration(600.0, 1200.0, 1.0) == pytest.approx(
+        (1200.0**2 - 600.0**2) / 3600.0 / 2.0)
+
+
+def test_run_gives_numpy_columns_and_the_summary(slot, tmp_path):
+    r = engage.run(program=slot, tool="flat", diameter="6mm", stock=BOX)
+    steps = r.steps
+    n = len(steps["step"])
+    assert n > 0
+    for name, column in steps.items():
+        assert isinstance(column, np.ndarray), name
+        assert len(column) == n, name
+    # The slot: 30 x 6 stadium plus a 3 mm disc, 2 mm deep; the voxel stock is within 0.2 %
+    # of a flat slot at the default voxel (D/20).
+    slot_volume = (30.0 * 6.0 + math.pi * 9.0) * 2.0
+    assert r.removed_mm3 == pytest.approx(slot_volume, rel=2e-3)
+    assert steps["removed_mm3"].sum() == pytest.approx(r.removed_mm3, rel=1e-9)
+    # Steady MRR D d F = 6 * 2 * 600 (within 0.5 %, the per-step accuracy).
+    assert steps["mrr_mm3_min"].max() == pytest.approx(7200.0, rel=5e-3)
+    s = r.summary
+    assert s["units"] == "mm"
+    assert s["removed"] == pytest.approx(r.removed_mm3, rel=1e-12)
+    # steps_csv is the same table the command line writes: a header and a row per step.
+    assert r.steps_csv().count("\n") == n + 1
+    out = tmp_path / "out"
+    r.write(str(out))
+    assert json.loads((out / "summary.json").read_text())["steps"] == n
+    assert (out / "stock.vdb").exists()
+
+
+def test_schedule_and_cross_check(slot):
+    r = engage.run("schedule", program=slot, tool="flat", diameter=6, stock=BOX,
+                   target_mrr="3600mm3/min", cross_check=True)
+    steps = r.steps
+    assert "feed_scheduled_mm_min" in steps and "removed_dexel_mm3" in steps
+    # Half the steady MRR: the steady feed halves, 600 -> 300 mm/min (a level within the
+    # 5 % min-change below it).
+    mid = (steps["x_mm"] > 10) & (steps["x_mm"] < 20) & (steps["feed_mm_min"] == 600.0)
+    assert mid.sum() > 10
+    assert np.all(steps["feed_scheduled_mm_min"][mid] <= 300.0 * 1.0001)
+    assert np.all(steps["feed_scheduled_mm_min"][mid] >= 300.0 * 0.95)
+    assert not steps["cross_check_differs"].any()
+    assert "F" in r.refed_program
+
+
+def test_read_program(slot):
+    moves = engage.read_program(slot)
+    assert list(moves["kind"]) == ["rapid", "line", "line", "rapid"]
+    assert moves["end_x_mm"][2] == 30.0
+    assert moves["feed_mm_min"][2] == 600.0
+
+
+def test_options_are_the_command_lines(slot):
+    names = {o["name"] for o in engage.options()}
+    assert {"jerk", "rapid-feed", "material-side", "target-mrr", "stock-model"} <= names
+    help_text = subprocess.run([os.environ["ENGAGE_BIN"], "schedule", "--help"],
+                               capture_output=True, text=True).stdout
+    for name in names:
+        assert "--" + name in help_text, name
+
+
+@pytest.mark.parametrize("options", [
+    {"voxel": "abc"},
+    {"voxle": "1"},
+    {"stock_model": "cubes"},
+    {"stock": "box:0,0,-10"},
+    {"stock": "box:500,500,-10,560,560,0"},
+])
+def test_errors_are_the_command_lines(slot, tmp_path, options):
+    base = {"program": slot, "tool": "flat", "diameter": "6mm", "stock": BOX}
+    base.update(options)
+    with pytest.raises(engage.Error) as e:
+        engage.run(**base)
+    args = [os.environ["ENGAGE_BIN"], "simulate", slot, "--out", str(tmp_path / "o")]
+    for key, value in base.items():
+        if key != "program":
+            args += ["--" + key.replace("_", "-"), str(value)]
+    cli = subprocess.run(args, capture_output=True, text=True)
+    assert cli.returncode != 0
+    if "voxle" not in options:  # the command line's own parser refuses an unknown option
+        assert cli.stderr.strip() == "engage: error: " + str(e.value)
+
+
+def test_fig9_example_script(tmp_path):
+    script = os.path.join(os.path.dirname(__file__), "..", "..", "data", "python",
+                          "fig9_corner.py")
+    png = tmp_path / "fig9.png"
+    run = subprocess.run([sys.executable, script, str(png)], capture_output=True, text=True,
+                         env=dict(os.environ))
+    assert run.returncode == 0, run.stderr
+    # The corner's peak: the full slot, 2 x nominal exactly; the steps around the corner
+    # sample it within a few percent.
+    assert "x nominal" in run.stdout
+    ratio = float(run.stdout.split("= ")[1].split(" x")[0])
+    assert 1.9 < ratio <= 2.0 + 1e-3
+    assert png.stat().st_size > 10000
