@@ -1,6 +1,7 @@
 #include "apps/MovesCommand.h"
 
 #include "engine/gcode/GcodeReader.h"
+#include "engine/run/MovesTable.h"
 
 #include <cstdio>
 #include <memory>
@@ -22,34 +23,8 @@ int runMoves(const MovesOptions& o) {
   reader.toolTableInch = o.toolTableUnits == "in";
   reader.blockDelete = o.blockDelete;
   const Toolpath path = readProgram(o.program, reader);
-  // Format the whole table before printing it: an error leaves no partial output.
-  std::string out = "line,kind,x,y,z,cx,cy,cz,plane,turns,feed_mm_min\n";
-  char buf[256];
-  auto row = [&](const Move& m, const Eigen::Vector3d& p) {
-    std::snprintf(buf, sizeof buf, "%d,%s,%.6f,%.6f,%.6f,", m.line, moveKindName(m.kind), p.x(),
-                  p.y(), p.z());
-    out += buf;
-    if (m.kind == MoveKind::Arc) {
-      std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%s,%d,", m.center.x(), m.center.y(),
-                    m.center.z(), planeName(m.plane), m.turns);
-      out += buf;
-    } else {
-      out += ",,,,,";
-    }
-    if (m.kind != MoveKind::Rapid) {
-      std::snprintf(buf, sizeof buf, "%.6g", m.feed);
-      out += buf;
-    }
-    out += '\n';
-  };
-  for (const Move& m : path.moves) {
-    if (m.kind == MoveKind::Spline) {
-      for (const Eigen::Vector3d& p : m.points)
-        row(m, p);
-    } else {
-      row(m, m.end);
-    }
-  }
+  // The whole table is made before printing: an error leaves no partial output.
+  const std::string out = movesTable(path);
   std::fwrite(out.data(), 1, out.size(), stdout);
   return 0;
 }
