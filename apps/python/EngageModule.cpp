@@ -191,54 +191,43 @@ void bindModel(py::module_& m) {
       },
       py::arg("cutter"), py::arg("stepover"), py::arg("depth"),
       "Paper Eq 2-3 as printed, with whether they describe this case");
+  using Rate = double (EngagementModel::*)(double, const PathShape&) const;
+  using Ratio = double (EngagementModel::*)(const PathShape&) const;
+  auto rate = [](Rate f) {
+    return [f](const EngagementModel& e, double v, const std::string& side, double radius) {
+      return (e.*f)(v, pathShape(side, radius));
+    };
+  };
+  auto ratio = [](Ratio f) {
+    return [f](const EngagementModel& e, const std::string& side, double radius) {
+      return (e.*f)(pathShape(side, radius));
+    };
+  };
+  const auto side = py::arg("side") = "straight";
+  const auto radius = py::arg("radius") = 0.0;
   py::class_<EngagementModel>(m, "Model",
                               "The analytic MRR model of one cutter at one stepover and depth "
                               "(paper Eq 6, 12-16, 21-23); side is straight, concave or convex, "
                               "radius the tool-centre path radius (mm)")
       .def(py::init<const AptCutter&, double, double>(), py::arg("cutter"), py::arg("stepover"),
            py::arg("depth"))
-      .def(
-          "mrr",
-          [](const EngagementModel& e, double feed, const std::string& side, double radius) {
-            return e.mrr(feed, pathShape(side, radius));
-          },
-          py::arg("feed"), py::arg("side") = "straight", py::arg("radius") = 0.0,
-          "exact MRR, mm^3/min (Eq 6 when straight)")
-      .def(
-          "mrr_paper",
-          [](const EngagementModel& e, double feed, const std::string& side, double radius) {
-            return e.mrrPaper(feed, pathShape(side, radius));
-          },
-          py::arg("feed"), py::arg("side") = "straight", py::arg("radius") = 0.0,
-          "MRR as the paper writes it (Eq 6, 15, 16), mm^3/min")
-      .def(
-          "centroid_speed_ratio",
-          [](const EngagementModel& e, const std::string& side, double radius) {
-            return e.centroidSpeedRatio(pathShape(side, radius));
-          },
-          py::arg("side"), py::arg("radius"), "(rho +- x_bar) / rho (Pappus)")
-      .def(
-          "centroid_speed_ratio_paper",
-          [](const EngagementModel& e, const std::string& side, double radius) {
-            return e.centroidSpeedRatioPaper(pathShape(side, radius));
-          },
-          py::arg("side"), py::arg("radius"), "Eq 12/13")
-      .def(
-          "adaptive_feed",
-          [](const EngagementModel& e, double target, const std::string& side, double radius) {
-            return e.adaptiveFeed(target, pathShape(side, radius));
-          },
-          py::arg("target_mrr"), py::arg("side") = "straight", py::arg("radius") = 0.0,
-          "tip feed for a target MRR, exact, mm/min")
-      .def(
-          "adaptive_feed_paper",
-          [](const EngagementModel& e, double target, const std::string& side, double radius) {
-            return e.adaptiveFeedPaper(target, pathShape(side, radius));
-          },
-          py::arg("target_mrr"), py::arg("side") = "straight", py::arg("radius") = 0.0,
-          "Eq 21-23, mm/min")
+      .def("mrr", rate(&EngagementModel::mrr), py::arg("feed"), side, radius,
+           "exact MRR, mm^3/min (Eq 6 when straight)")
+      .def("mrr_paper", rate(&EngagementModel::mrrPaper), py::arg("feed"), side, radius,
+           "MRR as the paper writes it (Eq 6, 15, 16), mm^3/min")
+      .def("centroid_speed_ratio", ratio(&EngagementModel::centroidSpeedRatio), side, radius,
+           "(rho +- x_bar) / rho (Pappus)")
+      .def("centroid_speed_ratio_paper", ratio(&EngagementModel::centroidSpeedRatioPaper), side,
+           radius, "Eq 12/13")
+      .def("adaptive_feed", rate(&EngagementModel::adaptiveFeed), py::arg("target_mrr"), side,
+           radius, "tip feed for a target MRR, exact, mm/min")
+      .def("adaptive_feed_paper", rate(&EngagementModel::adaptiveFeedPaper), py::arg("target_mrr"),
+           side, radius, "Eq 21-23, mm/min")
       .def("paper_centroid_distance", &EngagementModel::paperCentroidDistance, "the paper's m")
       .def_property_readonly("area_mm2", [](const EngagementModel& e) { return e.exact().area; });
+}
+
+void bindEquations(py::module_& m) {
   m.def("cutting_speed", &cuttingSpeed, py::arg("diameter"), py::arg("spindle_rpm"),
         "Eq 17: v = pi D N, mm/min");
   m.def("tangential_force", &tangentialForce, py::arg("mrr"), py::arg("specific_energy"),
@@ -304,5 +293,6 @@ PYBIND11_MODULE(engage, m) {
   py::register_exception<Error>(m, "Error");
   bindCutter(m);
   bindModel(m);
+  bindEquations(m);
   bindRun(m);
 }
