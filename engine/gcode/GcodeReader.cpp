@@ -17,6 +17,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
+#include <vector>
 
 namespace engage {
 namespace {
@@ -252,11 +253,23 @@ std::unique_ptr<SourceFile> makeSource(const std::string& name, const std::strin
 }
 
 std::string readFile(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw Error("cannot read program '" + path + "': it is a folder, not a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error("cannot read program '" + path + "': no such file or not readable");
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
+  // Read in pieces up to a bound, so that a device such as /dev/zero cannot fill the memory.
+  constexpr std::size_t kMaxBytes = std::size_t(1) << 30;
+  std::string text;
+  std::vector<char> buffer(1 << 20);
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    text.append(buffer.data(), static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxBytes)
+      throw Error("cannot read program '" + path + "': larger than 1 GiB (is it a program?)");
+  }
+  if (in.bad()) throw Error("cannot read program '" + path + "': a read failed");
+  return text;
 }
 
 /// The interpreter: modal state, parameters, call stack, and the moves it emits.
@@ -912,6 +925,12 @@ class Interpreter final : public gcode::ParameterSource {
     }();
     const std::optional<int> motionWord = w.gIn(1);
     const bool latheCycleLine = motionWord && isLatheCycle(*motionWord);
+    // E is G70's end offset and nothing else: "X1e308" reads as X1 E308, which LinuxCNC refuses.
+    if (w.has('E') && !(motionWord && *motionWord == 700))
+      fail(w.column('E'),
+           "expected an E word only with G70 (no exponents in G-code numbers: "
+           "write 1e5 as 100000), found E" +
+               num(w.get('E')));
     // U and W of a lathe cycle shift its profile; they are not axes there.
     if (latheCycleLine) w.otherAxes = w.has('A') || w.has('B') || w.has('C') || w.has('V');
     const bool axes =

@@ -104,7 +104,11 @@ class Parser {
     }
     // from_chars on the exact span: strtod would read "0x.1" (G0X.1) as a hex float.
     double v = 0.0;
-    std::from_chars(s_.data() + start, s_.data() + p_, v);
+    const auto r = std::from_chars(s_.data() + start, s_.data() + p_, v);
+    if (r.ec != std::errc())
+      failAt(start, "expected a number within the range of a double, found " +
+                        std::string(s_.substr(start, std::min<std::size_t>(p_ - start, 20))) +
+                        (p_ - start > 20 ? "..." : ""));
     return v;
   }
 
@@ -408,7 +412,11 @@ Block parseLine(std::string_view line, const ParameterSource& params) {
         }
       }
       in.expect('=', "'=' in a parameter assignment");
+      const std::size_t valueAt = in.pos();
       a.value = in.real();
+      if (!std::isfinite(a.value))
+        in.failAt(valueAt, "expected a finite value, found " +
+                               std::string(std::isnan(a.value) ? "nan" : "an infinite one"));
       block.assignments.push_back(std::move(a));
       continue;
     }
@@ -423,7 +431,11 @@ Block parseLine(std::string_view line, const ParameterSource& params) {
     Word w;
     w.letter = polar ? letter : static_cast<char>(std::toupper(static_cast<unsigned char>(letter)));
     w.column = column;
+    const std::size_t valueAt = in.pos();
     w.value = in.real();
+    if (!std::isfinite(w.value))
+      in.failAt(valueAt, std::string("expected a finite value of ") + w.letter + ", found " +
+                             (std::isnan(w.value) ? "nan" : "an infinite one"));
     w.endColumn = compact.column(in.pos() - 1) + 1;
     block.words.push_back(w);
   }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
@@ -90,8 +91,11 @@ ScheduleOptions scheduleOptions(const OptionValues& values, UnitSystem sys, doub
   };
   ScheduleOptions s;
   const std::string target = text("target-mrr");
-  if (target != "auto")
+  if (target != "auto") {
     s.targetMrr = parseQuantity(target, Dimension::VolumeRate, sys, "--target-mrr").value;
+    if (!(s.targetMrr > 0.0))
+      throw ParameterError("--target-mrr must be positive (or auto), found '" + target + "'");
+  }
   s.feedMin = quantity("feed-min", Dimension::Feed);
   s.feedMax = quantity("feed-max", Dimension::Feed);
   s.airFeed = quantity("air-feed", Dimension::Feed);
@@ -142,13 +146,12 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   // Everything that can be checked is checked here, before any work and before any output.
   ReaderOptions ro;
   ro.toolTable = text("tool-table");
+  ro.toolTableInch = text("tool-table-units") == "in";
   job.path = readProgram(job.program, ro);
+  // Bare numbers are in the program's units; --units changes the reports only.
+  const UnitSystem sys = job.path.inch ? UnitSystem::Inch : UnitSystem::Metric;
   const std::string units = text("units");
-  const UnitSystem sys = units == "in"   ? UnitSystem::Inch
-                         : units == "mm" ? UnitSystem::Metric
-                         : job.path.inch ? UnitSystem::Inch
-                                         : UnitSystem::Metric;
-  job.units = sys;
+  job.units = units == "in" ? UnitSystem::Inch : units == "mm" ? UnitSystem::Metric : sys;
   ToolOptions tool{text("tool"),          text("diameter"),
                    text("corner-radius"), text("taper-angle"),
                    text("tip-angle"),     text("bottom-angle"),
@@ -188,6 +191,16 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   job.stockModel = text("stock-model") == "dexel" ? StockModel::Dexel : StockModel::Voxel;
   if (!stock.empty()) job.stock = parseStock(stock, sys);
   job.out = text("out");
+  // The re-fed program goes into --out under the program's own name: never over the program.
+  if (job.scheduling()) {
+    namespace fs = std::filesystem;
+    std::error_code e1, e2;
+    const fs::path refed =
+        fs::weakly_canonical(fs::path(job.out) / fs::path(job.program).filename(), e1);
+    if (!e1 && refed == fs::weakly_canonical(job.program, e2) && !e2)
+      throw ParameterError("--out: the re-fed program would replace the program '" + job.program +
+                           "' itself; give another --out folder");
+  }
   job.quiet = text("quiet") == "true";
   job.progressLabel = commandName(command);
   return job;

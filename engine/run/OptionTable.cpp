@@ -85,6 +85,8 @@ std::vector<OptionInfo> makeTable() {
       choice("units", G::Output, {"mm", "in"}, "",
              "report units: mm or in (default: the program's)"),
       plain("tool-table", K::Text, G::Simulation, "", "LinuxCNC tool table for G43"),
+      choice("tool-table-units", G::Simulation, {"mm", "in"}, "mm",
+             "units of the tool table's lengths: mm or in"),
       plain("cross-check", K::Flag, G::Simulation, "",
             "also run the other stock model and report the steps where they disagree"),
       plain("cross-check-tolerance", K::Fraction, G::Simulation, "0.03",
@@ -99,16 +101,17 @@ std::vector<OptionInfo> makeTable() {
       scheduleOnly(quantity("air-feed", G::Schedule, D::Feed,
                             "feed where nothing is cut (default: the programmed)")),
       scheduleOnly(quantity("accel", G::Schedule, D::Acceleration,
-                            "tangential acceleration limit, e.g. 2000mm/s2 or 0.3g")),
-      scheduleOnly(quantity("jerk", G::Schedule, D::Jerk,
-                            "jerk limit, e.g. 50000mm/s3: room for the controller's S-curves")),
+                            "tangential acceleration limit, e.g. 2000mm/s2 or 0.3g (0: none)")),
+      scheduleOnly(
+          quantity("jerk", G::Schedule, D::Jerk,
+                   "jerk limit, e.g. 50000mm/s3: room for the controller's S-curves (0: none)")),
       scheduleOnly(
           quantity("rapid-feed", G::Schedule, D::Feed,
                    "the machine's rapid feed, to time rapids in the cycle time, e.g. 15000mm/min")),
       scheduleOnly(
           plain("min-change", K::Fraction, G::Schedule, "0.05", "relative step between F levels")),
       scheduleOnly(quantity("min-segment", G::Schedule, D::Length,
-                            "shortest run of one feed along the path")),
+                            "shortest run of one feed along the path (0: one step)")),
       scheduleOnly(quantity(
           "force-limit", G::Schedule, D::Force,
           "tangential force to hold instead of an MRR (with --specific-energy, --spindle)")),

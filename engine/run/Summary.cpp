@@ -174,7 +174,38 @@ std::string summaryJson(const RunResult& result) {
 }
 
 std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutputs& written) {
+  const Job& job = result.job;
+  auto length = [&](double v) { return formatQuantity(v, Dimension::Length, job.units); };
   std::vector<std::string> w;
+  // Where the answer cannot be trusted: a grid too coarse for the tool or the stock.
+  const double diameter = 2.0 * job.cutter.radius();
+  if (result.stock && diameter / job.voxel < 5.0)
+    w.push_back("the voxel (" + length(job.voxel) + ") is coarse for a " + length(diameter) +
+                " tool, fewer than 5 across it: volumes may be off by several percent (the "
+                "default is D/20 = " +
+                length(diameter / 20.0) + ")");
+  if (result.stock) {
+    const Box3 b = result.stock->bounds();
+    const double smallest = (b.max - b.min).minCoeff();
+    if (job.voxel > smallest)
+      w.push_back("the voxel (" + length(job.voxel) +
+                  ") is larger than the stock's smallest side (" + length(smallest) + ")");
+    if (result.sim.removed <= 0.0)
+      w.push_back(
+          "the run removed no material: the path never cuts the stock (check its "
+          "position, the program's Z and units)");
+  }
+  // Feeds no machine runs: 100 m/min is beyond the fastest milling machines' cutting feeds.
+  constexpr double kFastestFeed = 100000.0;  // mm/min
+  std::size_t fast = 0;
+  const Move* first = nullptr;
+  for (const Move& m : job.path.moves)
+    if (m.kind != MoveKind::Rapid && m.feed > kFastestFeed && ++fast == 1) first = &m;
+  if (first)
+    w.push_back(std::to_string(fast) + " move(s) feed faster than 100 m/min, first at line " +
+                std::to_string(first->line) + " (" +
+                formatQuantity(first->feed, Dimension::Feed, job.units) +
+                "): no machine cuts so fast; are the feeds in the program's units?");
   if (result.sim.rapidRemoved > 0.0)
     w.push_back("rapids removed " +
                 formatQuantity(result.sim.rapidRemoved, Dimension::Volume, result.job.units) +
@@ -218,17 +249,18 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
   if (result.crossChecked) {
     const CrossCheck& c = result.cross;
     const std::string other = stockModelName(job.otherModel());
-    appendf(
-        report,
-        "cross-check against the %s stock: %zu of %zu steps differ by more than %.1f %% "
-        "(worst %.2f %%%s), total removed differs by %.3f %% (%s run %.2f s)\n",
-        other.c_str(), c.differing.size(), r.steps.size(), 100 * job.crossTolerance,
-        100 * c.worstRelative,
-        c.differing.empty()
-            ? ""
-            : (", largest at line " + std::to_string(r.steps[c.differing.front()].line)).c_str(),
-        r.removed > 0 ? 100 * (c.other.removed / r.removed - 1.0) : 0.0, other.c_str(),
-        c.other.seconds);
+    appendf(report,
+            "cross-check against the %s stock: %zu of %zu steps differ by more than %.1f %% + %s "
+            "(four cells, for rounding)%s; the largest relative gap on steps above four cells is "
+            "%.2f %%; total removed differs by %.3f %% (%s run %.2f s)\n",
+            other.c_str(), c.differing.size(), r.steps.size(), 100 * job.crossTolerance,
+            q(c.floorVolume, Dimension::Volume).c_str(),
+            c.differing.empty()
+                ? ""
+                : (", the largest at line " + std::to_string(r.steps[c.differing.front()].line))
+                      .c_str(),
+            100 * c.worstRelative, r.removed > 0 ? 100 * (c.other.removed / r.removed - 1.0) : 0.0,
+            other.c_str(), c.other.seconds);
   }
   for (const std::string& w : runWarnings(result, written))
     report += "warning: " + w + "\n";

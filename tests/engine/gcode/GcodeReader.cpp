@@ -417,6 +417,16 @@ TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]"
              Contains("1:5: expected a parameter that has a value, found #<unset> unset"));
   CHECK_THAT(errorOf("G0 X[SQRT[-1]]\n"), Contains("expected a non-negative SQRT argument"));
   CHECK_THAT(errorOf("#6000=1\n"), Contains("expected a parameter number in 1..5602, found #6000"));
+  // Numbers as LinuxCNC reads them: no E word (X1e308 read as X1 before), no infinite or NaN
+  // values, no literal beyond a double's range (read as 0 before).
+  CHECK_THAT(errorOf("G0 X1e308\n"),
+             Contains("1:6: expected an E word only with G70") && Contains("found E308"));
+  CHECK_THAT(errorOf("G0 X[10**400]\n"),
+             Contains("1:5: expected a finite value of X, found an infinite one"));
+  CHECK_THAT(errorOf("#<x>=[10**400]\nG0 X#<x>\n"),
+             Contains("1:6: expected a finite value, found an infinite one"));
+  CHECK_THAT(errorOf("G0 X" + std::string(400, '9') + "\n"),
+             Contains("1:5: expected a number within the range of a double"));
   // Found by the fuzzer (UBSan): a parameter number beyond int, a bad coordinate system.
   CHECK_THAT(errorOf("G0 X#[1111111111111]\n"), Contains("expected a parameter number in 1..5602"));
   CHECK_THAT(errorOf("#5220=12\nG0 X1\n"),
@@ -462,4 +472,11 @@ TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]"
                     Contains("4:1: expected at most 3 moves in a program, found more"));
   CHECK_THROWS_WITH(readProgram("no/such/program.ngc"),
                     Contains("cannot read program 'no/such/program.ngc'"));
+  // A folder is not a program (an ifstream opens it and reads nothing); a device without end
+  // is read up to 1 GiB and refused, never until the memory is full.
+  CHECK_THROWS_WITH(readProgram(ENGAGE_SOURCE_DIR "/data"), Contains("it is a folder"));
+}
+
+TEST_CASE("a program without end is refused at 1 GiB", "[gcode]") {
+  CHECK_THROWS_WITH(readProgram("/dev/zero"), Contains("larger than 1 GiB"));
 }

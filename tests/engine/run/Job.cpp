@@ -52,9 +52,9 @@ TEST_CASE("makeJob types every option in internal units", "[run]") {
   CHECK(job.path.moves.size() == 4);
   CHECK_FALSE(job.scheduling());
 
-  // --units in: bare numbers are inches (0.01 in = 0.254 mm), suffixed ones keep their unit.
+  // Suffixed numbers keep their unit (0.01 in = 0.254 mm); --units sets the reports' units.
   v["units"] = "in";
-  v["voxel"] = "0.01";
+  v["voxel"] = "0.01in";
   v["step"] = "0.5mm";
   job = makeJob(JobCommand::Simulate, v);
   CHECK(job.units == UnitSystem::Inch);
@@ -120,4 +120,27 @@ TEST_CASE("makeJob refuses bad values, naming the option and the value", "[run]"
              Contains("--material-side applies without --stock"));
   CHECK_THAT(errorOf(sim, with("program", dir.path().string() + "/none.ngc")),
              Contains("none.ngc"));
+  // A target of 0 or below is an error, not "auto".
+  CHECK_THAT(errorOf(sched, with("target-mrr", "0")),
+             Contains("--target-mrr must be positive (or auto), found '0'"));
+  CHECK_THAT(errorOf(sched, with("target-mrr", "-5mm3/min")), Contains("must be positive"));
+  // schedule writes the re-fed program into --out under the program's name: never over it.
+  CHECK_THAT(errorOf(sched, with("out", dir.path().string())),
+             Contains("would replace the program"));
+  CHECK(errorOf(sched, with("out", (dir.path() / "out").string())).empty());
+}
+
+TEST_CASE("the report units change the reports only, not how bare numbers are read", "[run]") {
+  test::TempFolder dir("job_units");
+  const std::string program = dir.write("slot.ngc", test::slotProgram());  // G21: mm
+  OptionValues v = slotJob(program);
+  v["units"] = "in";
+  v["voxel"] = "0.25";
+  const Job job = makeJob(JobCommand::Simulate, v);
+  CHECK(job.units == UnitSystem::Inch);
+  // The box and the voxel in the program's mm, as without --units (they were read in inches).
+  REQUIRE(job.stock.box);
+  CHECK(job.stock.box->max.x() == 40.0);
+  CHECK(job.voxel == Approx(0.25).epsilon(1e-12));
+  CHECK(job.cutter.radius() == Approx(3.0).epsilon(1e-12));
 }

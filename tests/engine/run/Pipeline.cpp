@@ -128,3 +128,28 @@ TEST_CASE("runIntoFolder writes every file, and a refused job writes none", "[ru
                     Catch::Matchers::Contains("the tool path never reaches the stock"));
   CHECK_FALSE(std::filesystem::exists(dir.path() / "refused"));
 }
+
+TEST_CASE("warnings where the answer cannot be trusted", "[run]") {
+  test::TempFolder dir("pipeline_warnings");
+  auto warningsOf = [&](const std::string& text, const OptionValues& extra) {
+    OptionValues v = slotJob(dir.write("p.ngc", text));
+    for (const auto& [k, value] : extra)
+      v[k] = value;
+    const RunResult r = runJob(makeJob(JobCommand::Simulate, v));
+    std::string all;
+    for (const std::string& w : runWarnings(r, WrittenOutputs{}))
+      all += w + "\n";
+    return all;
+  };
+  using Catch::Matchers::Contains;
+  CHECK(warningsOf(test::slotProgram(), {}).empty());
+  // 6 mm tool, 1.5 mm voxels: 4 across it.
+  CHECK_THAT(warningsOf(test::slotProgram(), {{"voxel", "1.5"}}),
+             Contains("fewer than 5 across it"));
+  // The path passes 1 mm above the stock: it reaches the box's bounds but cuts nothing.
+  CHECK_THAT(warningsOf("G21 G90\nG0 X0 Y0 Z1\nG1 X30 F600\nM2\n", {}),
+             Contains("removed no material"));
+  // 4.5e6 mm/min, a feed no machine runs (an inch feed typed in the wrong units, say).
+  CHECK_THAT(warningsOf("G21 G90\nG0 X0 Y0 Z5\nG1 Z-2 F100\nG1 X30 F4500000\nM2\n", {}),
+             Contains("1 move(s) feed faster than 100 m/min, first at line 4"));
+}
