@@ -51,6 +51,8 @@ def files(folder):
     for base, _, names in os.walk(folder):
         for n in names:
             full = os.path.join(base, n)
+            if n == ".engage-files":  # the list of a run's files (since the staged outputs)
+                continue
             found[os.path.relpath(full, folder)] = masked(full, open(full, "rb").read(), folder)
     return found
 

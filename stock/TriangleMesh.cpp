@@ -9,7 +9,11 @@
 #include <OpenMesh/Core/System/omstream.hh>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <utility>
 #include <vector>
 
@@ -73,10 +77,24 @@ void writeStl(const TriangleMesh& m, const std::string& path) {
     mesh.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
   mesh.request_face_normals();
   mesh.update_face_normals();
+  // Through a stream of ours, checked: OpenMesh's file writer does not report a full disk.
   const std::string tmp = path + ".part.stl";
+  std::ofstream os(tmp, std::ios::binary);
+  const auto fail = [&](int error) {
+    os.close();
+    std::remove(tmp.c_str());
+    throw Error("cannot write '" + path + "': " + std::strerror(error));
+  };
+  if (!os) fail(errno);
   OpenMesh::IO::Options options(OpenMesh::IO::Options::Binary);
-  if (!OpenMesh::IO::write_mesh(mesh, tmp, options)) throw Error("cannot write '" + path + "'");
-  std::filesystem::rename(tmp, path);
+  if (!OpenMesh::IO::write_mesh(mesh, os, ".stl", options)) fail(errno ? errno : EIO);
+  os.flush();
+  if (!os) fail(errno);
+  os.close();
+  if (!os) fail(errno);
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) fail(ec.value());
 }
 
 }  // namespace engage

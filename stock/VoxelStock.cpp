@@ -52,9 +52,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -79,6 +81,36 @@ constexpr int kAngleBins = 72;
 void initVdb() {
   static std::once_flag once;
   std::call_once(once, [] { openvdb::initialize(); });
+}
+
+/// OpenVDB's io::File writes through a stream it never checks after opening: on a full disk it
+/// leaves a short file and reports nothing. The same seekable layout (Archive::write with grid
+/// offsets, as io::File writes it) goes here through a stream of ours, checked after every
+/// stage, into PATH.part, renamed into place when complete.
+class CheckedArchive : public openvdb::io::Archive {
+ public:
+  void writeTo(std::ostream& os, const openvdb::GridPtrVec& grids) const {
+    write(os, grids, /*seekable=*/true);
+  }
+};
+
+void writeVdb(const std::string& path, const openvdb::GridPtrVec& grids) {
+  const std::string tmp = path + ".part";
+  std::ofstream os(tmp, std::ios::binary);
+  const auto fail = [&](int error) {
+    os.close();
+    std::remove(tmp.c_str());
+    throw Error("cannot write '" + path + "': " + std::strerror(error));
+  };
+  if (!os) fail(errno);
+  CheckedArchive().writeTo(os, grids);
+  os.flush();
+  if (!os) fail(errno);
+  os.close();
+  if (!os) fail(errno);
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) fail(ec.value());
 }
 
 std::string num(double v) {
@@ -748,14 +780,7 @@ void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
         macc.setValue(c, static_cast<float>(s < stepMrr.size() ? stepMrr[s] : 0.0));
       }
     });
-  const std::string tmp = path + ".part";
-  {
-    openvdb::io::File file(tmp);
-    openvdb::GridPtrVec grids{removed, step, mrr};
-    file.write(grids);
-    file.close();
-  }
-  std::filesystem::rename(tmp, path);
+  writeVdb(path, openvdb::GridPtrVec{removed, step, mrr});
 }
 
 VoxelStock VoxelStock::box(const Box3& b, double h) {
@@ -1113,26 +1138,12 @@ void VoxelStock::writeStockVdb(const std::string& path) const {
   openvdb::tools::pruneLevelSet(surface->tree());
   surface->setName("surface");
   surface->setGridClass(openvdb::GRID_LEVEL_SET);
-  const std::string tmp = path + ".part";
-  {
-    openvdb::io::File file(tmp);
-    openvdb::GridPtrVec grids{impl_->grid, surface};
-    file.write(grids);
-    file.close();
-  }
-  std::filesystem::rename(tmp, path);
+  writeVdb(path, openvdb::GridPtrVec{impl_->grid, surface});
 }
 
 void VoxelStock::writeRemovedVdb(const std::string& path) const {
   if (!impl_->removed) throw Error("removed.vdb needs captureRemoved(true) before the removals");
-  const std::string tmp = path + ".part";
-  {
-    openvdb::io::File file(tmp);
-    openvdb::GridPtrVec grids{impl_->removed, impl_->step, impl_->mrr};
-    file.write(grids);
-    file.close();
-  }
-  std::filesystem::rename(tmp, path);
+  writeVdb(path, openvdb::GridPtrVec{impl_->removed, impl_->step, impl_->mrr});
 }
 
 std::size_t VoxelStock::writeStl(const std::string& path) const {

@@ -2,8 +2,10 @@
 
 #include "cutters/Error.h"
 
+#include <sys/wait.h>
 #include <cstdio>
 #include <cstdlib>
+
 #include <filesystem>
 #include <fstream>
 
@@ -42,8 +44,23 @@ void runGnuplot(const std::filesystem::path& dir, const std::string& scriptName,
   const std::string command =
       "cd " + quoted(dir.string()) + " && gnuplot " + quoted(scriptName) + " 2> " + quoted(log);
   const int rc = std::system(command.c_str());
-  if (rc != 0)
-    throw Error("gnuplot failed (is Debian's gnuplot-nox installed?); see " + (dir / log).string());
+  if (rc != 0) {
+    // Say what gnuplot said (its last line), and leave no half-drawn plot behind.
+    std::string said;
+    {
+      std::ifstream in(dir / log);
+      for (std::string line; std::getline(in, line);)
+        if (!line.empty()) said = line;
+    }
+    std::error_code ec;
+    for (const std::string& file : files)
+      std::filesystem::remove(dir / (file + ".part"), ec);
+    std::filesystem::remove(dir / log, ec);
+    const bool missing = WIFEXITED(rc) && WEXITSTATUS(rc) == 127;
+    throw Error(missing ? std::string("gnuplot is not installed (Debian's gnuplot-nox)")
+                        : "gnuplot failed: " +
+                              (said.empty() ? "exit status " + std::to_string(rc) : said));
+  }
   for (const std::string& file : files)
     std::filesystem::rename(dir / (file + ".part"), dir / file);
   std::filesystem::remove(dir / log);

@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -318,6 +319,7 @@ BatchReport runBatch(const BatchOptions& o) {
   const int threadsPerJob = std::max(1, cores / workers);
   std::atomic<std::size_t> next{0}, finished{0}, failed{0};
   std::mutex mutex;
+  std::exception_ptr fatal;
   const bool tty = isatty(2) && !o.quiet;
   const auto start = std::chrono::steady_clock::now();
   auto report = [&]() {
@@ -334,7 +336,16 @@ BatchReport runBatch(const BatchOptions& o) {
       tbb::task_arena arena(threadsPerJob);
       for (std::size_t k; (k = next++) < todo.size();) {
         ordered_json r;
-        arena.execute([&] { r = runOne(*todo[k], jobs); });
+        try {
+          arena.execute([&] { r = runOne(*todo[k], jobs); });
+        } catch (...) {
+          // A job's own failure is its record; this is the batch's (its record cannot be
+          // written: a full disk, say). The batch stops and reports it, it does not crash.
+          std::lock_guard<std::mutex> lock(mutex);
+          if (!fatal) fatal = std::current_exception();
+          next = todo.size();
+          return;
+        }
         std::lock_guard<std::mutex> lock(mutex);
         ++finished;
         if (r["status"] != "ok") ++failed;
@@ -343,6 +354,10 @@ BatchReport runBatch(const BatchOptions& o) {
     });
   for (std::thread& t : pool)
     t.join();
+  if (fatal) {
+    if (tty) std::fprintf(stderr, "\n");
+    std::rethrow_exception(fatal);
+  }
   if (tty) std::fprintf(stderr, "\n");
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace engage {
 
@@ -29,6 +30,30 @@ class OutputDirectory {
  private:
   std::filesystem::path created_;  ///< the topmost folder this made; empty if none
   bool keep_ = false;
+};
+
+/// A run's files, written into a staging folder inside the output folder
+/// (OUT/.engage-partial-PID) and moved into OUT only when every one is complete (publish). The
+/// files of an earlier run in OUT (listed in its OUT/.engage-files, and engage's own file names)
+/// are removed first, summary.json is removed first and moved in last: a folder with a
+/// summary.json holds one complete run, never a mix and never a half-written file, whatever
+/// kills the process when. Publishing holds a lock on OUT (flock), so two runs into one folder
+/// publish one after the other. Staging folders of runs that died are removed.
+class StagedOutputs {
+ public:
+  /// Makes the staging folder in `out` (which exists). Throws Error.
+  explicit StagedOutputs(const std::filesystem::path& out);
+  ~StagedOutputs();
+  StagedOutputs(const StagedOutputs&) = delete;
+  StagedOutputs& operator=(const StagedOutputs&) = delete;
+  /// Where the files go meanwhile.
+  const std::filesystem::path& staging() const { return staging_; }
+  /// Move the staged files into the output folder as described above. Throws Error.
+  void publish();
+
+ private:
+  std::filesystem::path out_, staging_;
+  bool published_ = false;
 };
 
 /// Read a whole file; throws Error naming it when it cannot be read.

@@ -60,7 +60,9 @@ CompletedRun runIntoFolder(Job job) {
       terminalProgress(prepared.job.progressLabel, prepared.job.quiet);
   CompletedRun run;
   run.result = executeRun(std::move(prepared), progress);
-  run.written = writeRunOutputs(run.result, run.result.job.out);
+  StagedOutputs staged(run.result.job.out);
+  run.written = writeRunOutputs(run.result, staged.staging());
+  staged.publish();
   outputs.keep();
   return run;
 }

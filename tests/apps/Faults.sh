@@ -1,0 +1,125 @@
+#!/usr/bin/env bash
+# Faults injected into real runs of `engage` (registered with ctest as apps.faults):
+#   a full disk (tmpfs), a read-only folder, SIGKILL and SIGINT at random points of a run, two
+#   runs into one folder at once, an earlier run's files in the output folder, a batch on a
+#   full disk. After each: the exit status, the message, and what the folder holds: either
+#   nothing new, or one complete run (summary.json last, its steps.csv complete, no .part file).
+# Needs root to mount tmpfs; without it prints why and exits 77 (ctest: skipped).
+#   bash tests/apps/Faults.sh build/apps/engage data /tmp/engage-faults
+set -u
+engage=$1
+data=$(cd "$2" && pwd)
+work=$3
+rm -rf "$work"
+mkdir -p "$work"
+passed=0
+failed=0
+crashes=0
+check() {  # check NAME COMMAND...: one row of the table
+  if "${@:2}"; then passed=$((passed + 1)); else echo "FAIL: $1"; failed=$((failed + 1)); fi
+}
+run() {  # run OUT ARGS...: engage simulate on the Fusion 360 pocket into OUT; sets rc
+  "$engage" simulate "$data/gcode/dialects/fusion360_pocket.nc" --tool flat --diameter 6mm \
+    --stock box:0,0,-10,60,60,0 --quiet --out "$@" >"$work/out.txt" 2>"$work/err.txt"
+  rc=$?
+  if [ "$rc" -ge 128 ] || [ "$rc" -eq 3 ]; then crashes=$((crashes + 1)); fi
+}
+complete() {  # the folder holds one complete run
+  local d=$1
+  [ -f "$d/summary.json" ] && [ -f "$d/stock.stl" ] && [ -f "$d/removed.vdb" ] || return 1
+  ! ls -A "$d" | grep -q '\.part' || return 1
+  local steps
+  steps=$(python3 -c "import json; print(json.load(open('$d/summary.json'))['steps'])") || return 1
+  [ "$(wc -l <"$d/steps.csv")" -eq $((steps + 1)) ]
+}
+nothing_or_complete() { [ ! -f "$1/summary.json" ] || complete "$1"; }
+# (a killed run's hidden staging folder, .engage-partial-PID, is removed by the next run)
+no_part_files() { ! ls -A "$1" | grep -q '\.part'; }
+says() { grep -q "$1" "$work/err.txt"; }
+absent() { [ ! -e "$1" ]; }
+nonzero() { [ "$rc" -ne 0 ]; }
+
+full=$work/full
+mkdir -p "$full"
+if ! mount -t tmpfs -o size=1200k tmpfs "$full" 2>/dev/null; then
+  echo "faults: cannot mount a tmpfs here (needs root): skipped"
+  exit 77
+fi
+ro=$work/ro
+mkdir -p "$ro"
+mount -t tmpfs -o ro,size=1m tmpfs "$ro"
+trap 'umount "$full" 2>/dev/null; umount "$ro" 2>/dev/null' EXIT
+
+# A full disk: a clear error naming the file, nothing left.
+run "$full/out"
+check "full disk: non-zero exit" nonzero
+check "full disk: says so" says "No space left on device"
+check "full disk: names the file" says "cannot write '"
+check "full disk: leaves nothing" absent "$full/out"
+
+# A batch on a full disk: an error, no crash, no job folder that looks complete.
+cat >"$work/manifest.json" <<JSON
+{"jobs": [{"program": "$data/gcode/dialects/fusion360_pocket.nc", "tool": "flat",
+           "diameter": "6mm", "stock": "box:0,0,-10,60,60,0"}]}
+JSON
+"$engage" batch "$work/manifest.json" --out "$full/batch" --quiet >"$work/out.txt" 2>"$work/err.txt"
+rc=$?
+if [ "$rc" -ge 128 ] || [ "$rc" -eq 3 ]; then crashes=$((crashes + 1)); fi
+check "batch, full disk: non-zero exit" nonzero
+check "batch, full disk: says so" says "No space left on device"
+check "batch, full disk: no zero-byte record" \
+  bash -c "! find '$full/batch' -name job.json -size 0 | grep -q ."
+umount "$full"
+
+# A read-only folder.
+run "$ro/out"
+check "read-only: non-zero exit" nonzero
+check "read-only: says so" says "Read-only file system"
+
+# An earlier run's files do not stay beside a new run's.
+out=$work/again
+"$engage" schedule "$data/gcode/paper/fig9_corner.ngc" --tool flat --diameter 6mm \
+  --stock box:-30,-10,-10,10,30,0 --quiet --out "$out" >/dev/null 2>&1
+check "earlier run: its re-fed program was there" test -f "$out/fig9_corner.ngc"
+run "$out"
+check "earlier run: new run complete" complete "$out"
+check "earlier run: its re-fed program is gone" absent "$out/fig9_corner.ngc"
+check "earlier run: its feed plot is gone" absent "$out/feed.png"
+
+# SIGKILL and SIGINT at random points of a longer run, into a folder holding a complete run.
+out=$work/killed
+run "$out"
+RANDOM=7
+for i in 1 2 3 4 5 6 7 8; do
+  for sig in KILL INT; do
+    "$engage" simulate "$data/gcode/bench/finishing_raster.ngc" --tool ball --diameter 1mm \
+      --stock box:0,0,-10,65,65,0 --voxel 0.3mm --quiet --out "$out" >/dev/null 2>&1 &
+    pid=$!
+    sleep "$((RANDOM % 40 / 10)).$((RANDOM % 10))"
+    kill -s "$sig" "$pid" 2>/dev/null
+    wait "$pid" 2>/dev/null
+    check "kill -$sig run $i: the folder holds one complete run or none" nothing_or_complete "$out"
+    check "kill -$sig run $i: no half-written file" no_part_files "$out"
+  done
+done
+run "$out"
+check "after the kills: a new run completes" complete "$out"
+check "after the kills: no staging folder left" bash -c "! ls -A '$out' | grep -q engage-partial"
+
+# Two runs into one folder at once.
+out=$work/both
+"$engage" simulate "$data/gcode/dialects/fusion360_pocket.nc" --tool flat --diameter 6mm \
+  --stock box:0,0,-10,60,60,0 --quiet --out "$out" >/dev/null 2>"$work/err1.txt" &
+p1=$!
+"$engage" simulate "$data/gcode/paper/fig9_corner.ngc" --tool flat --diameter 6mm \
+  --stock box:-30,-10,-10,10,30,0 --quiet --out "$out" >/dev/null 2>"$work/err2.txt" &
+p2=$!
+wait "$p1"
+r1=$?
+wait "$p2"
+r2=$?
+check "two at once: both succeed" test "$r1" -eq 0 -a "$r2" -eq 0
+check "two at once: one complete run in the folder" complete "$out"
+
+echo "faults: $passed passed, $failed failed (crashes: $crashes)"
+[ "$failed" -eq 0 ] && [ "$crashes" -eq 0 ]
