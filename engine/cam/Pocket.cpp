@@ -667,6 +667,11 @@ std::vector<Ring> pocketRings(const std::vector<Loop>& boundary, const PocketOpt
                          " mm: material would stay between "
                          "the rings");
   if (o.stepDown < 0.0) throw ParameterError("step-down must not be negative");
+  if (o.stepDown > 0.0 && o.depth / o.stepDown > 10000.0)
+    throw ParameterError("step-down: " + std::to_string(o.stepDown) +
+                         " mm makes more than 10000 "
+                         "levels of a " +
+                         std::to_string(o.depth) + " mm deep pocket");
 
   // The boundary as one set of oriented polygons: outer loops counter-clockwise, islands
   // clockwise (even-odd: a loop inside a loop is an island).

@@ -47,7 +47,8 @@ struct ReaderOptions {
   long long maxExecutedLines = 50'000'000;
   /// Safety limit on moves (a lathe cycle with a tiny depth of cut in a loop): a GcodeError
   /// beyond it.
-  std::size_t maxMoves = 100'000'000;
+  /// 10 million moves hold about 1.8 GB; the option --max-moves raises it.
+  std::size_t maxMoves = 10'000'000;
 };
 
 /// Read and interpret a program file. Throws GcodeError ("file:line:col: expected ..., found

@@ -37,6 +37,14 @@ AptCutter buildCutter(const ToolOptions& o, UnitSystem bare) {
   only(tip.has_value(), "--tip-angle", {"chamfer"});
   only(bottom.has_value(), "--bottom-angle", {"apt"});
 
+  // A side flatter than 85 deg to the axis is a face, not a taper: its sweep reaches metres
+  // out and the run would take hours (89.9 deg: 10 m wide at a flute length of 18 mm).
+  constexpr double kMaxTaperRad = 85.0 * 3.14159265358979323846 / 180.0;
+  if (taper && std::abs(*taper) > kMaxTaperRad && std::abs(*taper) < 3.14159265358979323846 / 2)
+    throw ParameterError(
+        "--taper-angle: expected at most 85 deg (a flatter side is a face, not "
+        "a taper), found '" +
+        o.taperAngle + "'");
   const double h = flute.value_or(3.0 * diameter);
   if (o.tool == "flat") return AptCutter::flat(diameter, h, o.flutes);
   if (o.tool == "ball") return AptCutter::ball(diameter, h, o.flutes);

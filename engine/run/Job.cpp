@@ -147,6 +147,11 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   ReaderOptions ro;
   ro.toolTable = text("tool-table");
   ro.toolTableInch = text("tool-table-units") == "in";
+  const int maxMoves = wholeNumber(text("max-moves"), "--max-moves");
+  const int maxSteps = wholeNumber(text("max-steps"), "--max-steps");
+  if (maxMoves < 1) throw ParameterError("--max-moves must be positive");
+  if (maxSteps < 1) throw ParameterError("--max-steps must be positive");
+  ro.maxMoves = static_cast<std::size_t>(maxMoves);
   job.path = readProgram(job.program, ro);
   // Bare numbers are in the program's units; --units changes the reports only.
   const UnitSystem sys = job.path.inch ? UnitSystem::Inch : UnitSystem::Metric;
@@ -164,6 +169,7 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   if (!(job.voxel > 0.0)) throw ParameterError("--voxel must be positive");
   const std::string step = text("step");
   SimulationOptions& so = job.simulation;
+  so.maxSteps = static_cast<std::size_t>(maxSteps);
   so.stepLength = step.empty() ? 0.0 : parseQuantity(step, Dimension::Length, sys, "--step").value;
   if (!step.empty() && !(so.stepLength > 0.0)) throw ParameterError("--step must be positive");
   if (!text("stepover").empty())

@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <string>
 
 namespace engage {
 namespace {
@@ -44,6 +46,13 @@ double curvatureOf(const Move& m) {
   return r > 0.0 ? (m.turns > 0 ? 1.0 : -1.0) / r : 0.0;
 }
 
+/// A count or length for a message, six significant digits ("1.33333e+09").
+std::string formatCount(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
 /// A step before it is cut: a piece [t0, t1] of a move.
 struct Planned {
   std::size_t move;
@@ -52,7 +61,8 @@ struct Planned {
 };
 
 /// Every move in pieces no longer than L (arcs as arc pieces, never longer than the move).
-std::vector<Planned> planSteps(const Toolpath& path, double L) {
+std::vector<Planned> planSteps(const Toolpath& path, double L, std::size_t maxSteps) {
+  checkStepCount(path, L, maxSteps);
   std::vector<Planned> plan;
   for (std::size_t i = 0; i < path.moves.size(); ++i) {
     const double len = moveLength(path.moves[i]);
@@ -125,6 +135,26 @@ void finish(Agreement& a) {
 
 }  // namespace
 
+void checkStepCount(const Toolpath& path, double L, std::size_t maxSteps) {
+  double steps = 0.0, longest = 0.0;
+  const Move* longestMove = nullptr;
+  for (const Move& m : path.moves) {
+    const double len = moveLength(m);
+    if (!(len > 0.0)) continue;
+    steps += std::max(1.0, std::ceil(len / L - 1e-9));
+    if (len > longest) {
+      longest = len;
+      longestMove = &m;
+    }
+  }
+  if (steps > static_cast<double>(maxSteps))
+    throw ParameterError(
+        "the program makes " + formatCount(steps) + " steps of at most " + formatCount(L) +
+        " mm, more than the limit of " + std::to_string(maxSteps) + " (--max-steps); its longest " +
+        "move, at line " + std::to_string(longestMove ? longestMove->line : 0) + ", is " +
+        formatCount(longest) + " mm long: check the program's units, or give a longer --step");
+}
+
 SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& stock,
                           const SimulationOptions& options) {
   refuseOtherAxes(path);
@@ -134,7 +164,7 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& 
   out.volumeBefore = stock.volume();
 
   // Plan the steps first (for progress and for the records).
-  const std::vector<Planned> plan = planSteps(path, L);
+  const std::vector<Planned> plan = planSteps(path, L, options.maxSteps);
 
   const auto start = std::chrono::steady_clock::now();
   double arc = 0.0;
@@ -230,7 +260,7 @@ SimulationResult analyticSteps(const Toolpath& path, const AptCutter& cutter,
   SimulationResult out;
   out.volumeBefore = out.volumeAfter = kNaN;
   double arc = 0.0;
-  for (const Planned& p : planSteps(path, L)) {
+  for (const Planned& p : planSteps(path, L, options.maxSteps)) {
     const Move& m = path.moves[p.move];
     const StepPath sp = stepPath(m, p.t0, p.t1);
     StepRecord r = plannedRecord(p, m, sp, arc);

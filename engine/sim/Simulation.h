@@ -25,6 +25,9 @@ struct SimulationOptions {
   std::optional<double> depth;
   /// Called now and then with (steps done, steps in all).
   std::function<void(std::size_t, std::size_t)> progress;
+  /// The most steps a run may make (each record takes about 150 bytes): more is refused up
+  /// front, naming the longest move (a move of 1e9 mm, a helix of 100000 turns).
+  std::size_t maxSteps = 5'000'000;
   /// Record each step's removal time in SimulationResult::stepSeconds (benchmarks; kept out
   /// of the reports, which must not change from run to run).
   bool timeSteps = false;
@@ -84,6 +87,10 @@ struct SimulationResult {
   std::vector<Difference> largest;  ///< the steady-state steps that differ most (exact form)
   std::vector<double> stepSeconds;  ///< per step, when SimulationOptions::timeSteps
 };
+
+/// Check that cutting `path` into steps no longer than `stepLength` (mm) makes at most
+/// `maxSteps` steps. Throws ParameterError naming the count and the longest move.
+void checkStepCount(const Toolpath& path, double stepLength, std::size_t maxSteps);
 
 /// Run a tool path through a stock. Throws Error from the model or the stock.
 SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& stock,

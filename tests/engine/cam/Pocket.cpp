@@ -203,6 +203,11 @@ TEST_CASE("pocket: levels and the program's entries", "[cam]") {
   CHECK(levelZ(o, 2) == Approx(-2.5));
   const std::vector<Ring> rings = pocketRings({rectangle(0, 0, 50, 30)}, o);
   REQUIRE(rings.size() == 9);
+  // A step-down of 1e-6 mm would make 2.5 million levels: refused up front.
+  PocketOptions thin = o;
+  thin.stepDown = 1e-6;
+  CHECK_THROWS_WITH(pocketRings({rectangle(0, 0, 50, 30)}, thin),
+                    Catch::Matchers::Contains("more than 10000 levels"));
   CHECK(rings[3].level == 1);
   CHECK_FALSE(rings[3].linked);
   const Toolpath path = readProgramText(writePocketProgram(rings, o, {}), "levels.ngc");

@@ -24,15 +24,15 @@ TEST_CASE("a manifest is refused whole before any job runs", "[run]") {
   const std::string unknown =
       dir.write("unknown.json", R"({"jobs": [{"program": "p.ngc", "voxle": "1"}]})");
   CHECK_THROWS_WITH(readManifest(unknown), Contains("job 1: unknown option \"voxle\""));
-  const std::string out =
-      dir.write("out.json", R"({"jobs": [{"program": "p.ngc", "out": "x"}]})");
+  const std::string out = dir.write("out.json", R"({"jobs": [{"program": "p.ngc", "out": "x"}]})");
   CHECK_THROWS_WITH(readManifest(out), Contains("\"out\" is not a job option"));
-  const std::string names = dir.write(
-      "names.json", R"({"jobs": [{"program": "a/p.ngc"}, {"program": "b/p.ngc"}]})");
+  const std::string names =
+      dir.write("names.json", R"({"jobs": [{"program": "a/p.ngc"}, {"program": "b/p.ngc"}]})");
   CHECK_THROWS_WITH(readManifest(names), Contains("the name \"p\" is taken by job 1"));
   // The same key in two different objects is no duplicate.
   const std::string ok = dir.write(
-      "ok.json", R"({"defaults": {"tool": "flat"}, "jobs": [{"program": "p.ngc", "tool": "ball"}]})");
+      "ok.json",
+      R"({"defaults": {"tool": "flat"}, "jobs": [{"program": "p.ngc", "tool": "ball"}]})");
   const auto jobs = readManifest(ok);
   REQUIRE(jobs.size() == 1);
   CHECK(jobs[0].values.at("tool") == "ball");
@@ -58,7 +58,7 @@ TEST_CASE("a batch runs its jobs and records a failure without stopping", "[run]
   const auto record = nlohmann::json::parse(in);
   CHECK(record["status"] == "ok");
   // The slot: (30 x 6 + pi 3^2) x 2 mm^3 within the voxels' 0.2 % on a flat slot.
-  CHECK(record["removed_mm3"].get<double>() == Approx((180.0 + 3.14159265358979 * 9.0) * 2.0)
-                                                   .epsilon(0.002));
+  CHECK(record["removed_mm3"].get<double>() ==
+        Approx((180.0 + 3.14159265358979 * 9.0) * 2.0).epsilon(0.002));
   CHECK(std::filesystem::exists(dir.path() / "out" / "batch.csv"));
 }

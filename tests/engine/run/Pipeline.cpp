@@ -153,3 +153,34 @@ TEST_CASE("warnings where the answer cannot be trusted", "[run]") {
   CHECK_THAT(warningsOf("G21 G90\nG0 X0 Y0 Z5\nG1 Z-2 F100\nG1 X30 F4500000\nM2\n", {}),
              Contains("1 move(s) feed faster than 100 m/min, first at line 4"));
 }
+
+TEST_CASE("bounded work: what would run for hours or fill the memory is refused up front",
+          "[run]") {
+  test::TempFolder dir("pipeline_bounded");
+  using Catch::Matchers::Contains;
+  // A move of 1e10 mm: 1.3e10 steps of 0.75 mm (out of memory before; an int overflow too).
+  OptionValues v = slotJob(
+      dir.write("long.ngc", "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10000000000 F600\nM2\n"));
+  v["out"] = (dir.path() / "out").string();
+  CHECK_THROWS_WITH(runIntoFolder(makeJob(JobCommand::Simulate, v)),
+                    Contains("more than the limit of 5000000 (--max-steps)") &&
+                        Contains("at line 4, is 1e+10 mm long"));
+  CHECK_FALSE(std::filesystem::exists(dir.path() / "out"));
+  // 100000 turns of a 5 mm circle: 4.2e6 steps, refused below that limit.
+  v = slotJob(dir.write("turns.ngc",
+                        "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG2 X0 Y0 I5 J0 P100000 F600\nM2\n"));
+  v["max-steps"] = "1000000";
+  CHECK_THROWS_WITH(prepareRun(makeJob(JobCommand::Simulate, v)), Contains("4.18881e+06 steps"));
+  // A loop that never ends: refused at --max-moves.
+  v = slotJob(dir.write("forever.ngc",
+                        "G21 G90\nG0 X0 Y0 Z5\no1 while [1]\nG1 X10 F600\n"
+                        "G1 X0\no1 endwhile\nM2\n"));
+  v["max-moves"] = "1000";
+  CHECK_THROWS_WITH(makeJob(JobCommand::Simulate, v), Contains("expected at most 1000 moves"));
+  // A taper of 89.9 deg is 10 m wide at its flute length.
+  v = slotJob(dir.write("slot.ngc", test::slotProgram()));
+  v["tool"] = "taper";
+  v["taper-angle"] = "89.9deg";
+  CHECK_THROWS_WITH(makeJob(JobCommand::Simulate, v),
+                    Contains("--taper-angle: expected at most 85 deg"));
+}
