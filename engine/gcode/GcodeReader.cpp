@@ -782,6 +782,15 @@ class Interpreter final : public gcode::ParameterSource {
         auto& groups = L == 'G' ? gGroups : mGroups;
         const bool coolantPair = L == 'M' && group == 8 && (code == 70 || code == 80);
         auto it = groups.find(group);
+        // G80 beside a motion code (Fanuc and Haas headers: "G00 G17 G21 G40 G49 G80 G90"),
+        // as LinuxCNC takes it: the canned cycle is cancelled and the motion code is the mode.
+        if (L == 'G' && group == 1 && it != groups.end() &&
+            (code == 800) != (it->second.first == 800)) {
+          if (code == 800) continue;
+          w.g.erase(std::find(w.g.begin(), w.g.end(), std::pair<int, int>(800, it->second.second)));
+          groups.erase(it);
+          it = groups.end();
+        }
         if (it != groups.end() &&
             !(coolantPair && (it->second.first == 70 || it->second.first == 80)) && group != 0 &&
             !(L == 'M' && group == 5))
@@ -911,7 +920,10 @@ class Interpreter final : public gcode::ParameterSource {
     }
     // Lathe diameter mode (G7, from this line on): every X word is a diameter, halved here
     // (motions, G92, G10 alike, as LinuxCNC does); arc centre words stay radii.
-    if (const auto g = w.gIn(15)) diameterMode_ = *g == 70;
+    if (const auto g = w.gIn(15)) {
+      diameterMode_ = *g == 70;
+      if (diameterMode_) markLathe("G7, lathe diameter mode");
+    }
     if (diameterMode_ && w.has('X')) w.v[slot('X')] = w.get('X') / 2.0;
     if (const auto g = w.gIn(3)) incremental_ = *g == 910;
     if (const auto g = w.gIn(4)) arcIncremental_ = *g == 911;
@@ -925,6 +937,7 @@ class Interpreter final : public gcode::ParameterSource {
     }();
     const std::optional<int> motionWord = w.gIn(1);
     const bool latheCycleLine = motionWord && isLatheCycle(*motionWord);
+    if (latheCycleLine) markLathe(codeName('G', *motionWord) + ", a lathe turning cycle");
     // E is G70's end offset and nothing else: "X1e308" reads as X1 E308, which LinuxCNC refuses.
     if (w.has('E') && !(motionWord && *motionWord == 700))
       fail(w.column('E'),
@@ -935,7 +948,17 @@ class Interpreter final : public gcode::ParameterSource {
     if (latheCycleLine) w.otherAxes = w.has('A') || w.has('B') || w.has('C') || w.has('V');
     const bool axes =
         w.has('X') || w.has('Y') || w.has('Z') || w.has('@') || w.has('^') || w.otherAxes;
-    otherAxes_ = w.otherAxes;
+    // A rotary or UVW word moves its axis only where its target differs from the axis's
+    // position (posts write "A0" on every line of 3-axis programs): only then is the move
+    // marked. Axis words of G92, G10, G28 and the like set no position here.
+    otherAxes_ = false;
+    for (const char axis : {'A', 'B', 'C', 'U', 'V', 'W'}) {
+      if (!w.has(axis) || (latheCycleLine && (axis == 'U' || axis == 'W')) || g0) continue;
+      double& at = otherAxisPosition_[std::string_view("ABCUVW").find(axis)];
+      const double to = incremental_ ? at + w.get(axis) : w.get(axis);
+      if (to != at) otherAxes_ = true;
+      at = to;
+    }
     if (g0 && motionWord && axes && (*g0 == 100 || *g0 == 280 || *g0 == 300 || *g0 == 920))
       fail(w.gColumn(*g0), "expected either " + codeName('G', *g0) +
                                " or a motion on this line, found both using the axis words");
@@ -1272,6 +1295,13 @@ class Interpreter final : public gcode::ParameterSource {
       emitLinear(MoveKind::Line, start, feed);
       out_.moves.back().feedSource = FeedSource::Spindle;
     }
+  }
+
+  /// Note the first sign that the program is for a lathe.
+  void markLathe(const std::string& what) {
+    if (out_.latheLine != 0) return;
+    out_.latheLine = line_ + 1;
+    out_.lathe = what;
   }
 
   /// G70-G72, LinuxCNC's lathe cycles: a rapid to the cycle's start point, the profile read
@@ -1811,7 +1841,8 @@ class Interpreter final : public gcode::ParameterSource {
   int tool_ = 0;
   int preparedTool_ = 0;
   double toolLength_ = 0.0;
-  bool otherAxes_ = false;  ///< the current line has rotary or UVW words
+  bool otherAxes_ = false;                     ///< the current line moves a rotary or UVW axis
+  std::array<double, 6> otherAxisPosition_{};  ///< A, B, C, U, V, W (program units)
   int motion_ = 800;        ///< G80: axis words need a motion word first, as in LinuxCNC
   int motionBefore_ = 800;  ///< motion mode before the current block
   bool cycleActive_ = false;

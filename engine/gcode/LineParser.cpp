@@ -372,6 +372,12 @@ Block parseLine(std::string_view line, const ParameterSource& params) {
     OWord& o = block.oword;
     o.column = in.column();
     std::size_t q = p;
+    // A program number alone on its line (Fanuc and Haas posts write "O1001 (PART)" after
+    // the '%'): nothing to run.
+    std::size_t digits = p + 1;
+    while (digits < s.size() && std::isdigit(static_cast<unsigned char>(s[digits])))
+      ++digits;
+    if (digits > p + 1 && digits == s.size()) return block;
     if (!readOWordHead(s, q, o.label, o.keyword)) {
       in.setPos(p + 1);
       in.fail(

@@ -153,6 +153,10 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   if (maxSteps < 1) throw ParameterError("--max-steps must be positive");
   ro.maxMoves = static_cast<std::size_t>(maxMoves);
   job.path = readProgram(job.program, ro);
+  if (job.path.latheLine != 0)
+    throw ParameterError(job.program + ":" + std::to_string(job.path.latheLine) +
+                         ": a lathe program (" + job.path.lathe +
+                         "): engage simulates milling; `engage moves` lists its moves");
   // Bare numbers are in the program's units; --units changes the reports only.
   const UnitSystem sys = job.path.inch ? UnitSystem::Inch : UnitSystem::Metric;
   const std::string units = text("units");

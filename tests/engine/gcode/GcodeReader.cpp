@@ -355,6 +355,31 @@ TEST_CASE("rotary and UVW words stay out of the XYZ path, marked on the move", "
   CHECK_FALSE(m[1].otherAxes);
   CHECK(m[2].otherAxes);
   checkPoint(m[2].end, 2, 0, 0);  // an A/B-only move keeps X, Y, Z
+  // A word that does not move its axis (posts write A0 on 3-axis programs) marks nothing; in
+  // G91 a zero increment neither.
+  const auto still = moves("G0 X1 A0\nG1 X2 A0 F100\nG1 X3 A5\nG91 G1 X1 A0\nM2\n");
+  REQUIRE(still.size() == 4);
+  CHECK_FALSE(still[0].otherAxes);
+  CHECK_FALSE(still[1].otherAxes);
+  CHECK(still[2].otherAxes);
+  CHECK_FALSE(still[3].otherAxes);
+}
+
+TEST_CASE("headers as Fanuc and Haas posts write them", "[gcode]") {
+  // A program number after the '%', and G80 beside a motion code on one line.
+  const Toolpath p = run("%\nO1001 (PART)\nG00 G17 G21 G40 G49 G80 G90\nX5 Y5\nG1 X10 F100\n%\n");
+  REQUIRE(p.moves.size() == 2);
+  CHECK(p.moves[0].kind == MoveKind::Rapid);  // G0 is the mode, G80 cancelled the cycle
+  checkPoint(p.moves[0].end, 5, 5, 0);
+  CHECK(p.latheLine == 0);
+  // An O-word with a keyword missing is still an error.
+  CHECK_THAT(errorOf("o100 cal\n"), Contains("expected an O-word label and keyword"));
+}
+
+TEST_CASE("a lathe program says so", "[gcode]") {
+  const Toolpath p = run("G18 G21 G90\nG7\nG0 X20 Z2\nG1 Z-10 F100\nM2\n");
+  CHECK(p.latheLine == 2);
+  CHECK(p.lathe == "G7, lathe diameter mode");
 }
 
 TEST_CASE("splines are flattened within 0.001 mm", "[gcode]") {

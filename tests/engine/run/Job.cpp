@@ -120,6 +120,9 @@ TEST_CASE("makeJob refuses bad values, naming the option and the value", "[run]"
              Contains("--material-side applies without --stock"));
   CHECK_THAT(errorOf(sim, with("program", dir.path().string() + "/none.ngc")),
              Contains("none.ngc"));
+  // A lathe program is read, not simulated as if it were milling.
+  CHECK_THAT(errorOf(sim, with("program", dir.write("lathe.ngc", "G18 G21 G7\nG0 X20 Z2\nM2\n"))),
+             Contains("lathe.ngc:1: a lathe program (G7, lathe diameter mode)"));
   // A target of 0 or below is an error, not "auto".
   CHECK_THAT(errorOf(sched, with("target-mrr", "0")),
              Contains("--target-mrr must be positive (or auto), found '0'"));
