@@ -9,7 +9,10 @@
 #include <OpenMesh/Core/System/omstream.hh>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -22,15 +25,61 @@ namespace {
 using Mesh = OpenMesh::TriMesh_ArrayKernelT<>;
 }
 
+namespace {
+
+/// A binary STL checked before OpenMesh reads it (which takes a wrong triangle count or a NaN
+/// silently): the size its header's count implies, and every coordinate finite. Returns the
+/// problem in one line, or "" when it is sound. An ASCII STL ("solid" and "facet") is left to
+/// the reader and the checks after it.
+std::string binaryStlProblem(const std::string& bytes) {
+  const bool ascii =
+      bytes.compare(0, 5, "solid") == 0 && bytes.find("facet", 5) != std::string::npos;
+  if (ascii) return "";
+  if (bytes.size() < 84)
+    return "too short for a binary STL (" + std::to_string(bytes.size()) + " bytes, at least 84)";
+  std::uint32_t n = 0;
+  std::memcpy(&n, bytes.data() + 80, 4);
+  const std::uint64_t expected = 84 + 50 * static_cast<std::uint64_t>(n);
+  if (expected != bytes.size())
+    return "its header counts " + std::to_string(n) + " triangles, which take " +
+           std::to_string(expected) + " bytes, but the file has " + std::to_string(bytes.size());
+  for (std::uint32_t t = 0; t < n; ++t)
+    for (int k = 0; k < 9; ++k) {
+      float v = 0.0f;
+      std::memcpy(&v, bytes.data() + 84 + 50 * static_cast<std::size_t>(t) + 12 + 4 * k, 4);
+      if (!std::isfinite(v))
+        return "triangle " + std::to_string(t + 1) + " has " +
+               (std::isnan(v) ? "a NaN" : "an infinite") + " coordinate";
+    }
+  return "";
+}
+
+}  // namespace
+
 TriangleMesh readMesh(const std::string& path) {
   if (!std::filesystem::is_regular_file(path))
     throw Error("cannot read stock mesh '" + path + "': no such file");
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".stl") {
+    std::ifstream in(path, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string problem = binaryStlProblem(bytes);
+    if (!problem.empty()) throw Error("cannot read stock mesh '" + path + "': " + problem);
+  }
+  omlog().disable();  // OpenMesh reports to the terminal; the one line below says what failed
+  omerr().disable();
   Mesh mesh;
-  if (!OpenMesh::IO::read_mesh(mesh, path))
-    throw Error("cannot read stock mesh '" + path + "': not an STL, OBJ, OFF or PLY mesh");
+  const bool read = OpenMesh::IO::read_mesh(mesh, path);
+  omerr().enable();
+  if (!read) throw Error("cannot read stock mesh '" + path + "': not an STL, OBJ, OFF or PLY mesh");
   TriangleMesh out;
   for (const auto& v : mesh.vertices()) {
     const auto p = mesh.point(v);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      throw Error("cannot read stock mesh '" + path + "': vertex " + std::to_string(v.idx() + 1) +
+                  " has a NaN or infinite coordinate");
     out.points.push_back({p[0], p[1], p[2]});
   }
   for (const auto& f : mesh.faces()) {

@@ -1,0 +1,65 @@
+// Tests of stock/TriangleMesh.h: a broken mesh is refused with its actual problem in one line.
+
+#include "stock/TriangleMesh.h"
+
+#include "cutters/Error.h"
+
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+
+using namespace engage;
+using Catch::Matchers::Contains;
+
+namespace {
+
+/// A binary STL of the unit tetrahedron's four faces; `count` overrides the header's count,
+/// `bad` puts that value into the first coordinate.
+std::string tetrahedronStl(std::uint32_t count = 4, float bad = 0.0f) {
+  const std::array<std::array<float, 3>, 4> p = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  std::string s(80, ' ');
+  s.append(reinterpret_cast<const char*>(&count), 4);
+  for (const auto& f : faces) {
+    float rec[12] = {};
+    for (int v = 0; v < 3; ++v)
+      for (int a = 0; a < 3; ++a)
+        rec[3 + 3 * v + a] = p[static_cast<std::size_t>(f[v])][static_cast<std::size_t>(a)];
+    s.append(reinterpret_cast<const char*>(rec), sizeof rec);
+    s.append(2, '\0');
+  }
+  if (bad != 0.0f || std::isnan(bad)) std::memcpy(&s[84 + 12], &bad, 4);
+  return s;
+}
+
+std::string write(const std::string& name, const std::string& bytes) {
+  const auto path = std::filesystem::temp_directory_path() / ("engage_mesh_" + name);
+  std::ofstream(path, std::ios::binary) << bytes;
+  return path.string();
+}
+
+}  // namespace
+
+TEST_CASE("a sound binary STL reads, a broken one names its problem", "[stock]") {
+  const TriangleMesh m = readMesh(write("good.stl", tetrahedronStl()));
+  CHECK(m.triangles.size() == 4);
+  CHECK(boundaryEdgeCount(m) == 0);
+  CHECK_THROWS_WITH(readMesh(write("count.stl", tetrahedronStl(5))),
+                    Contains("its header counts 5 triangles, which take 334 bytes, but the file "
+                             "has 284"));
+  CHECK_THROWS_WITH(
+      readMesh(write("nan.stl", tetrahedronStl(4, std::numeric_limits<float>::quiet_NaN()))),
+      Contains("triangle 1 has a NaN coordinate"));
+  CHECK_THROWS_WITH(
+      readMesh(write("inf.stl", tetrahedronStl(4, std::numeric_limits<float>::infinity()))),
+      Contains("triangle 1 has an infinite coordinate"));
+  CHECK_THROWS_WITH(readMesh(write("short.stl", "solid x")),
+                    Contains("too short for a binary STL (7 bytes, at least 84)"));
+}
