@@ -2,6 +2,7 @@
 
 #include "cutters/Error.h"
 #include "engine/run/Job.h"
+#include "engine/run/Manifest.h"
 #include "engine/run/Output.h"
 #include "engine/run/Pipeline.h"
 #include "engine/run/RunOutputs.h"
@@ -33,67 +34,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using nlohmann::ordered_json;
-
-std::string text(const json& v) {
-  return v.is_string() ? v.get<std::string>() : v.dump();
-}
-
-/// Check one key of a job's merged spec against the option table; false when the key is a
-/// schedule option inherited from the defaults by a simulate job (it does not concern it).
-bool checkKey(const std::string& key, const json& value, JobCommand command, const json& own,
-              const std::string& where) {
-  const OptionInfo* o = findJobOption(key);
-  if (!o) throw Error(where + ": unknown option \"" + key + "\"");
-  if (o->commandLineOnly)
-    throw Error(where + ": \"" + key +
-                "\" is not a job option (the batch sets each job's folder and shows progress)");
-  if (!appliesTo(*o, command)) {
-    if (own.contains(key)) throw Error(where + ": \"" + key + "\" applies to schedule jobs only");
-    return false;
-  }
-  if (!value.is_string() && !value.is_number() && !value.is_boolean())
-    throw Error(where + ": \"" + key + "\" must be a string, a number or true/false");
-  return true;
-}
-
-/// One job of the manifest, checked and with its files resolved against `base`.
-ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs::path& base,
-                    const std::string& where) {
-  if (!j.is_object()) throw Error(where + ": expected an object");
-  json spec = defaults;
-  spec.update(j);
-  if (!spec.contains("program")) throw Error(where + ": no \"program\"");
-  const std::string command = spec.value("command", "simulate");
-  if (command != "simulate" && command != "schedule")
-    throw Error(where + ": \"command\" must be simulate or schedule, found \"" + command + "\"");
-  spec["command"] = command;
-  ManifestJob job;
-  job.index = i;
-  job.command = command == "schedule" ? JobCommand::Schedule : JobCommand::Simulate;
-  // Relative files are relative to the manifest.
-  auto resolve = [&](const char* key) {
-    if (!spec.contains(key)) return;
-    const std::string v = text(spec[key]);
-    if (std::string(key) == "stock" && v.rfind("box:", 0) == 0) return;
-    if (fs::path(v).is_relative()) spec[key] = (base / v).lexically_normal().string();
-  };
-  resolve("program");
-  resolve("stock");
-  resolve("tool-table");
-  for (const auto& [key, value] : spec.items()) {
-    if (key == "name" || key == "command") continue;
-    if (key == "program" || checkKey(key, value, job.command, j, where))
-      job.values[key] = text(value);
-  }
-  job.name =
-      spec.contains("name") ? text(spec["name"]) : fs::path(text(spec["program"])).stem().string();
-  if (job.name.empty() || job.name.find_first_of("/\\") != std::string::npos || job.name == "." ||
-      job.name == "..")
-    throw Error(where + ": bad job name \"" + job.name + "\"");
-  spec["name"] = job.name;
-  job.specJson = spec.dump();
-  return job;
-}
 
 /// Run one job into DIR/jobs/NAME (through NAME.partial, renamed when complete) and return
 /// its record. A job's failure is its record; it never stops the batch.
@@ -378,49 +318,6 @@ BatchReport runBatch(const BatchOptions& o) {
         result.failures.push_back("job " + j.name + " failed: " + r["error"].get<std::string>());
     }
   return result;
-}
-
-std::vector<ManifestJob> readManifest(const std::string& manifest) {
-  const fs::path path(manifest);
-  json m;
-  // A key given twice in one object would silently keep only one of its values: refused.
-  std::vector<std::set<std::string>> keys;
-  std::string duplicate;
-  const json::parser_callback_t noDuplicates = [&](int, json::parse_event_t event, json& parsed) {
-    if (event == json::parse_event_t::object_start) keys.emplace_back();
-    if (event == json::parse_event_t::object_end && !keys.empty()) keys.pop_back();
-    if (event == json::parse_event_t::key &&
-        !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty())
-      duplicate = parsed.get<std::string>();
-    return true;
-  };
-  try {
-    m = json::parse(readFile(path), noDuplicates);
-  } catch (const json::parse_error& e) {
-    throw Error(path.string() + ": not valid JSON: " + e.what());
-  }
-  if (!duplicate.empty())
-    throw Error(path.string() + ": the key \"" + duplicate + "\" is given twice in one object");
-  if (!m.is_object() || !m.contains("jobs") || !m["jobs"].is_array())
-    throw Error(path.string() + ": expected an object with a \"jobs\" array");
-  const json defaults = m.value("defaults", json::object());
-  if (!defaults.is_object()) throw Error(path.string() + ": \"defaults\" must be an object");
-  for (const auto& [key, value] : m.items())
-    if (key != "jobs" && key != "defaults")
-      throw Error(path.string() + ": unknown key \"" + key + "\" (expected jobs, defaults)");
-  std::vector<ManifestJob> jobs;
-  std::map<std::string, std::size_t> names;
-  for (std::size_t i = 0; i < m["jobs"].size(); ++i) {
-    const std::string where = path.string() + ": job " + std::to_string(i + 1);
-    ManifestJob job = readJob(m["jobs"][i], defaults, i, path.parent_path(), where);
-    if (names.count(job.name))
-      throw Error(where + ": the name \"" + job.name + "\" is taken by job " +
-                  std::to_string(names[job.name] + 1) + "; give the jobs distinct \"name\"s");
-    names[job.name] = i;
-    jobs.push_back(std::move(job));
-  }
-  if (jobs.empty()) throw Error(path.string() + ": no jobs");
-  return jobs;
 }
 
 std::string mergeBatch(const BatchOptions& o) {

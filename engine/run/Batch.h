@@ -8,6 +8,7 @@
 /// whose record is there and whose options are unchanged). A merge joins the records into
 /// OUT/batch.csv and batch.json.
 
+#include "engine/run/Manifest.h"
 #include "engine/run/OptionTable.h"
 #include "engine/units/Quantity.h"
 
@@ -16,20 +17,6 @@
 #include <vector>
 
 namespace engage {
-
-/// One job of a manifest: its options merged over the defaults, checked against the table.
-struct ManifestJob {
-  std::size_t index = 0;  ///< 0-based place in the manifest
-  std::string name;       ///< folder name under OUT/jobs
-  JobCommand command = JobCommand::Simulate;
-  OptionValues values;   ///< the options as typed, files resolved against the manifest
-  std::string specJson;  ///< the spec as recorded in job.json (compact JSON)
-};
-
-/// Read and check a manifest: every structural problem (not JSON, unknown or misplaced keys,
-/// duplicate names) is reported here, before any job runs. Relative files are relative to the
-/// manifest. Throws Error naming the manifest and the job.
-std::vector<ManifestJob> readManifest(const std::string& path);
 
 /// The settings of a batch or merge.
 struct BatchOptions {
