@@ -96,7 +96,7 @@ std::vector<ManifestJob> readManifest(const std::string& manifest) {
   };
   try {
     m = json::parse(readFile(path), noDuplicates);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse errors, and numbers beyond a double (9e9999)
     throw Error(path.string() + ": not valid JSON: " + e.what());
   }
   if (!duplicate.empty())

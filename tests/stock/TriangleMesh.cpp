@@ -62,4 +62,11 @@ TEST_CASE("a sound binary STL reads, a broken one names its problem", "[stock]")
       Contains("triangle 1 has an infinite coordinate"));
   CHECK_THROWS_WITH(readMesh(write("short.stl", "solid x")),
                     Contains("too short for a binary STL (7 bytes, at least 84)"));
+  // A face naming no vertex made Debian's OpenMesh abort on an assertion (found by fuzzing).
+  CHECK_THROWS_WITH(readMesh(write("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")),
+                    Contains("line 4: face vertex '9' is not one of the 3 vertices before it"));
+  CHECK_THROWS_WITH(readMesh(write("empty.obj", "v 0 0 0\nf /0\n")),
+                    Contains("line 2: face vertex '/0'"));
+  CHECK(readMesh(write("good.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/2 -1\n")).triangles.size() ==
+        1);
 }

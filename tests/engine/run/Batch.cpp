@@ -1,4 +1,4 @@
-// Tests of engine/run/Batch.h: the manifest reader's refusals and a small batch's records.
+// Tests of engine/run/Batch.h: a small batch's records.
 
 #include "engine/run/Batch.h"
 
@@ -14,29 +14,6 @@
 
 using namespace engage;
 using Catch::Matchers::Contains;
-
-TEST_CASE("a manifest is refused whole before any job runs", "[run]") {
-  test::TempFolder dir("manifest_refused");
-  // A key given twice in one object kept only its last value before.
-  const std::string twice = dir.write(
-      "twice.json", R"({"jobs": [{"program": "p.ngc", "tool": "flat", "tool": "ball"}]})");
-  CHECK_THROWS_WITH(readManifest(twice), Contains("the key \"tool\" is given twice"));
-  const std::string unknown =
-      dir.write("unknown.json", R"({"jobs": [{"program": "p.ngc", "voxle": "1"}]})");
-  CHECK_THROWS_WITH(readManifest(unknown), Contains("job 1: unknown option \"voxle\""));
-  const std::string out = dir.write("out.json", R"({"jobs": [{"program": "p.ngc", "out": "x"}]})");
-  CHECK_THROWS_WITH(readManifest(out), Contains("\"out\" is not a job option"));
-  const std::string names =
-      dir.write("names.json", R"({"jobs": [{"program": "a/p.ngc"}, {"program": "b/p.ngc"}]})");
-  CHECK_THROWS_WITH(readManifest(names), Contains("the name \"p\" is taken by job 1"));
-  // The same key in two different objects is no duplicate.
-  const std::string ok = dir.write(
-      "ok.json",
-      R"({"defaults": {"tool": "flat"}, "jobs": [{"program": "p.ngc", "tool": "ball"}]})");
-  const auto jobs = readManifest(ok);
-  REQUIRE(jobs.size() == 1);
-  CHECK(jobs[0].values.at("tool") == "ball");
-}
 
 TEST_CASE("a batch runs its jobs and records a failure without stopping", "[run]") {
   test::TempFolder dir("batch_small");
