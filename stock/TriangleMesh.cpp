@@ -1,6 +1,7 @@
 #include "stock/TriangleMesh.h"
 
 #include "cutters/Error.h"
+#include "stock/AtomicFile.h"
 
 // OpenMesh's IO must be included before its mesh headers (its readers and writers register
 // there).
@@ -160,23 +161,10 @@ void writeStl(const TriangleMesh& m, const std::string& path) {
   mesh.request_face_normals();
   mesh.update_face_normals();
   // Through a stream of ours, checked: OpenMesh's file writer does not report a full disk.
-  const std::string tmp = path + ".part.stl";
-  std::ofstream os(tmp, std::ios::binary);
-  const auto fail = [&](int error) {
-    os.close();
-    std::remove(tmp.c_str());
-    throw Error("cannot write '" + path + "': " + std::strerror(error));
-  };
-  if (!os) fail(errno);
-  OpenMesh::IO::Options options(OpenMesh::IO::Options::Binary);
-  if (!OpenMesh::IO::write_mesh(mesh, os, ".stl", options)) fail(errno ? errno : EIO);
-  os.flush();
-  if (!os) fail(errno);
-  os.close();
-  if (!os) fail(errno);
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) fail(ec.value());
+  writeFileAtomically(path, [&](std::ostream& os) {
+    OpenMesh::IO::Options options(OpenMesh::IO::Options::Binary);
+    if (!OpenMesh::IO::write_mesh(mesh, os, ".stl", options)) os.setstate(std::ios::badbit);
+  });
 }
 
 }  // namespace engage

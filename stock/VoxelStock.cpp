@@ -32,6 +32,7 @@
 
 #include "cutters/Error.h"
 
+#include "stock/AtomicFile.h"
 #include "stock/CubeClip.h"
 #include "stock/TriangleMesh.h"
 
@@ -95,22 +96,7 @@ class CheckedArchive : public openvdb::io::Archive {
 };
 
 void writeVdb(const std::string& path, const openvdb::GridPtrVec& grids) {
-  const std::string tmp = path + ".part";
-  std::ofstream os(tmp, std::ios::binary);
-  const auto fail = [&](int error) {
-    os.close();
-    std::remove(tmp.c_str());
-    throw Error("cannot write '" + path + "': " + std::strerror(error));
-  };
-  if (!os) fail(errno);
-  CheckedArchive().writeTo(os, grids);
-  os.flush();
-  if (!os) fail(errno);
-  os.close();
-  if (!os) fail(errno);
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) fail(ec.value());
+  writeFileAtomically(path, [&](std::ostream& os) { CheckedArchive().writeTo(os, grids); });
 }
 
 std::string num(double v) {

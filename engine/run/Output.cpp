@@ -1,6 +1,7 @@
 #include "engine/run/Output.h"
 
 #include "cutters/Error.h"
+#include "stock/AtomicFile.h"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -17,24 +18,7 @@
 namespace engage {
 
 void writeAtomically(const std::filesystem::path& path, const std::string& text) {
-  const std::filesystem::path tmp = path.string() + ".part";
-  std::ofstream f(tmp, std::ios::binary);
-  // Every stage is checked, the close too: a full disk shows at the flush or the close.
-  const auto fail = [&](int error) {
-    f.close();
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw Error("cannot write '" + path.string() + "': " + std::strerror(error));
-  };
-  if (!f) fail(errno);
-  f << text;
-  f.flush();
-  if (!f) fail(errno);
-  f.close();
-  if (!f) fail(errno);
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) fail(ec.value());
+  writeFileAtomically(path.string(), [&](std::ostream& os) { os << text; });
 }
 
 OutputDirectory::OutputDirectory(const std::filesystem::path& dir) {
