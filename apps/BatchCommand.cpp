@@ -27,7 +27,10 @@ void addBatchCommands(CLI::App& app, std::function<int()>& run) {
   cmd->add_option("manifest", o->manifest, "JSON manifest of jobs")->required();
   cmd->add_option("--out", o->out, "output folder (jobs/NAME per job)")->capture_default_str();
   cmd->add_option("--shard", o->shard, "run the i-th of N shares of the jobs, e.g. 0/4");
-  cmd->add_option("--workers", o->workers, "jobs side by side (default: one per core)");
+  cmd->add_option("--workers", o->workers, "jobs side by side (default: one per usable CPU)");
+  cmd->add_option("--threads", o->threads,
+                  "CPUs to use in all (default: those this process may use: its affinity "
+                  "mask and cgroup quota)");
   cmd->add_flag("--retry-failed", o->retryFailed, "run failed jobs again");
   cmd->add_option("--units", o->units, "units of batch.csv: mm or in")->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "no progress on the terminal");

@@ -11,6 +11,7 @@
 #include <tbb/task_arena.h>
 #include <nlohmann/json.hpp>
 
+#include <sched.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -20,6 +21,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -212,6 +214,26 @@ UnitSystem unitsOf(const std::string& u) {
 
 }  // namespace
 
+int usableCpus() {
+  int cpus = static_cast<int>(std::thread::hardware_concurrency());
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0) cpus = CPU_COUNT(&set);
+  // cgroup v2 "QUOTA PERIOD" (or "max"), else v1's two files: CPUs = ceil(quota / period).
+  double quota = -1.0, period = 0.0;
+  if (std::ifstream v2("/sys/fs/cgroup/cpu.max"); v2) {
+    std::string q;
+    v2 >> q >> period;
+    if (q != "max") quota = std::atof(q.c_str());
+  } else {
+    std::ifstream("/sys/fs/cgroup/cpu/cpu.cfs_quota_us") >> quota;
+    std::ifstream("/sys/fs/cgroup/cpu/cpu.cfs_period_us") >> period;
+  }
+  if (quota > 0.0 && period > 0.0)
+    cpus = std::min(cpus, static_cast<int>(std::ceil(quota / period)));
+  return std::max(1, cpus);
+}
+
 BatchReport runBatch(const BatchOptions& o) {
   const std::vector<ManifestJob> all = readManifest(o.manifest);
   const Shard shard = parseShard(o.shard);
@@ -252,8 +274,9 @@ BatchReport runBatch(const BatchOptions& o) {
 
   // Workers: jobs side by side, each with its share of the threads (results do not depend
   // on the thread count). Measured on 2 cores: 2 jobs side by side beat 1 job on 2 threads
-  // (README, "engage batch"), so the default is one job per core.
-  const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  // (README, "engage batch"), so the default is one job per usable CPU.
+  if (o.threads < 0) throw ParameterError("--threads must not be negative");
+  const int cores = o.threads > 0 ? o.threads : usableCpus();
   const int workers =
       std::max(1, std::min<int>(o.workers > 0 ? o.workers : cores, static_cast<int>(todo.size())));
   const int threadsPerJob = std::max(1, cores / workers);

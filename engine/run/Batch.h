@@ -18,12 +18,17 @@
 
 namespace engage {
 
+/// The CPUs this process may use: its affinity mask (taskset, a Slurm allocation), bounded by
+/// a cgroup CPU quota (containers, Slurm with cgroups) where one is set; at least 1.
+int usableCpus();
+
 /// The settings of a batch or merge.
 struct BatchOptions {
   std::string manifest;
   std::string out = "out/batch";
   std::string shard;  ///< "i/N" or empty (all)
-  int workers = 0;    ///< 0: one per core
+  int workers = 0;    ///< 0: one per usable CPU (at most the jobs)
+  int threads = 0;    ///< CPUs to use in all; 0: usableCpus()
   bool retryFailed = false;
   bool quiet = false;
   std::string units = "mm";  ///< of batch.csv

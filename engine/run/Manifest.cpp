@@ -108,11 +108,16 @@ std::vector<ManifestJob> readManifest(const std::string& manifest) {
   for (const auto& [key, value] : m.items())
     if (key != "jobs" && key != "defaults")
       throw Error(path.string() + ": unknown key \"" + key + "\" (expected jobs, defaults)");
+  // Files resolve against the manifest's real folder, so that the jobs (and their records)
+  // are the same however the manifest's path was typed: relative, absolute, through a link.
+  std::error_code ec;
+  const fs::path real = fs::weakly_canonical(fs::absolute(path), ec);
+  const fs::path base = (ec ? fs::absolute(path) : real).parent_path();
   std::vector<ManifestJob> jobs;
   std::map<std::string, std::size_t> names;
   for (std::size_t i = 0; i < m["jobs"].size(); ++i) {
     const std::string where = path.string() + ": job " + std::to_string(i + 1);
-    ManifestJob job = readJob(m["jobs"][i], defaults, i, path.parent_path(), where);
+    ManifestJob job = readJob(m["jobs"][i], defaults, i, base, where);
     if (names.count(job.name))
       throw Error(where + ": the name \"" + job.name + "\" is taken by job " +
                   std::to_string(names[job.name] + 1) + "; give the jobs distinct \"name\"s");

@@ -5,6 +5,7 @@
 #include "cutters/Error.h"
 #include "tests/engine/run/RunTestSupport.h"
 
+#include <sched.h>
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
@@ -38,4 +39,23 @@ TEST_CASE("a batch runs its jobs and records a failure without stopping", "[run]
   CHECK(record["removed_mm3"].get<double>() ==
         Approx((180.0 + 3.14159265358979 * 9.0) * 2.0).epsilon(0.002));
   CHECK(std::filesystem::exists(dir.path() / "out" / "batch.csv"));
+}
+
+TEST_CASE("a batch counts the CPUs it may use, not the machine's", "[run]") {
+  cpu_set_t all;
+  REQUIRE(sched_getaffinity(0, sizeof all, &all) == 0);
+  // As under `taskset -c 0` or a Slurm allocation of one CPU: one (hardware_concurrency()
+  // counted every core of the node before).
+  cpu_set_t one;
+  CPU_ZERO(&one);
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &all)) {
+      CPU_SET(c, &one);
+      break;
+    }
+  REQUIRE(sched_setaffinity(0, sizeof one, &one) == 0);
+  CHECK(usableCpus() == 1);
+  REQUIRE(sched_setaffinity(0, sizeof all, &all) == 0);
+  CHECK(usableCpus() <= CPU_COUNT(&all));
+  CHECK(usableCpus() >= 1);
 }

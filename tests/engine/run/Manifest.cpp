@@ -7,6 +7,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <filesystem>
+
 using namespace engage;
 using Catch::Matchers::Contains;
 
@@ -35,4 +37,23 @@ TEST_CASE("a manifest is refused whole before any job runs", "[run]") {
   const auto jobs = readManifest(ok);
   REQUIRE(jobs.size() == 1);
   CHECK(jobs[0].values.at("tool") == "ball");
+}
+
+TEST_CASE("a manifest's jobs are the same however its path is typed", "[run]") {
+  test::TempFolder dir("manifest_paths");
+  std::filesystem::create_directories(dir.path() / "sub");
+  const std::string m =
+      dir.write("sub/m.json", R"({"jobs": [{"program": "p.ngc", "tool": "flat"}]})");
+  std::filesystem::create_directory_symlink(dir.path() / "sub", dir.path() / "link");
+  const auto absolute = readManifest(m);
+  const auto linked = readManifest((dir.path() / "link" / "m.json").string());
+  const auto cwd = std::filesystem::current_path();
+  std::filesystem::current_path(dir.path());
+  const auto relative = readManifest("sub/../sub/m.json");
+  std::filesystem::current_path(cwd);
+  REQUIRE(absolute.size() == 1);
+  CHECK(absolute[0].specJson == linked[0].specJson);
+  CHECK(absolute[0].specJson == relative[0].specJson);
+  CHECK(absolute[0].values.at("program") ==
+        std::filesystem::weakly_canonical(dir.path() / "sub" / "p.ngc").string());
 }
