@@ -285,6 +285,15 @@ BatchReport runBatch(const BatchOptions& o) {
   std::exception_ptr fatal;
   const bool tty = isatty(2) && !o.quiet;
   const auto start = std::chrono::steady_clock::now();
+  // On a terminal a progress line; otherwise (a cluster's log) or with --quiet one line per job
+  // as it ends, so that a shard's log shows its progress before the shard ends.
+  auto logJob = [&](const ManifestJob& job, const ordered_json& r) {
+    if (tty) return;
+    std::fprintf(stderr, "batch: [%zu/%zu] %s %s (%.1f s)\n", finished.load(), todo.size(),
+                 job.name.c_str(), r["status"].get<std::string>().c_str(),
+                 r["run_time_s"].get<double>());
+    std::fflush(stderr);
+  };
   auto report = [&]() {
     if (!tty) return;
     const double s =
@@ -312,6 +321,7 @@ BatchReport runBatch(const BatchOptions& o) {
         std::lock_guard<std::mutex> lock(mutex);
         ++finished;
         if (r["status"] != "ok") ++failed;
+        logJob(*todo[k], r);
         report();
       }
     });

@@ -5,7 +5,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 #include <string>
@@ -37,6 +40,23 @@ bool checkKey(const std::string& key, const json& value, JobCommand command, con
   if (!value.is_string() && !value.is_number() && !value.is_boolean())
     throw Error(where + ": \"" + key + "\" must be a string, a number or true/false");
   return true;
+}
+
+/// FNV-1a (64 bits) of a file's bytes as hex, or "unreadable".
+std::string contentHash(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "unreadable";
+  std::uint64_t h = 1469598103934665603ull;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    for (std::streamsize i = 0; i < in.gcount(); ++i) {
+      h ^= static_cast<unsigned char>(buf[i]);
+      h *= 1099511628211ull;
+    }
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
 }
 
 /// One job of the manifest, checked and with its files resolved against `base`.
@@ -74,6 +94,14 @@ ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs
       job.name == "..")
     throw Error(where + ": bad job name \"" + job.name + "\"");
   spec["name"] = job.name;
+  // The job is its options and the content of its files: an edited program, stock mesh or
+  // tool table runs again, an unchanged one is not run twice.
+  json content = json::object();
+  for (const char* key : {"program", "stock", "tool-table"})
+    if (job.values.count(key) &&
+        !(std::string(key) == "stock" && job.values.at(key).rfind("box:", 0) == 0))
+      content[key] = contentHash(job.values.at(key));
+  spec["content"] = content;
   job.specJson = spec.dump();
   return job;
 }

@@ -59,3 +59,27 @@ TEST_CASE("a batch counts the CPUs it may use, not the machine's", "[run]") {
   CHECK(usableCpus() <= CPU_COUNT(&all));
   CHECK(usableCpus() >= 1);
 }
+
+TEST_CASE("a batch runs a job again when its program changes, not otherwise", "[run]") {
+  test::TempFolder dir("batch_resume");
+  dir.write("slot.ngc", test::slotProgram());
+  const std::string manifest =
+      dir.write("m.json", R"({"jobs": [{"program": "slot.ngc", "tool": "flat", "diameter": "6mm",
+                              "stock": "box:-10,-10,-10,40,10,0"}]})");
+  BatchOptions o;
+  o.manifest = manifest;
+  o.out = (dir.path() / "out").string();
+  o.quiet = true;
+  CHECK_THAT(runBatch(o).text, Contains("1 jobs: 1 run (0 failed), 0 already done"));
+  CHECK_THAT(runBatch(o).text, Contains("1 jobs: 0 run (0 failed), 1 already done"));
+  // The same options, but the program cut 1 mm deeper: its old results must not be reused.
+  std::string deeper = test::slotProgram();
+  deeper.replace(deeper.find("Z-2"), 3, "Z-3");
+  dir.write("slot.ngc", deeper);
+  CHECK_THAT(runBatch(o).text, Contains("1 jobs: 1 run (0 failed), 0 already done"));
+  std::ifstream in(dir.path() / "out" / "jobs" / "slot" / "job.json");
+  const auto record = nlohmann::json::parse(in);
+  // 3 mm deep now: (30 x 6 + pi 3^2) x 3 mm^3, within the voxels' 0.2 % on a flat slot.
+  CHECK(record["removed_mm3"].get<double>() ==
+        Approx((180.0 + 3.14159265358979 * 9.0) * 3.0).epsilon(0.002));
+}
