@@ -11,7 +11,9 @@
 #include <tbb/task_arena.h>
 #include <nlohmann/json.hpp>
 
+#include <fcntl.h>
 #include <sched.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -99,6 +101,26 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs) {
   fs::rename(partial, done);
   return r;
 }
+
+/// An exclusive, non-blocking lock on a job (flock on a lock file beside its folder): taken
+/// while the job runs, so that two processes never run one job. flock works on local file
+/// systems and on NFS with a lock manager; the kernel releases it when the process dies.
+class JobLock {
+ public:
+  explicit JobLock(const fs::path& file) : fd_(::open(file.c_str(), O_CREAT | O_RDWR, 0644)) {
+    held_ = fd_ >= 0 && ::flock(fd_, LOCK_EX | LOCK_NB) == 0;
+  }
+  ~JobLock() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  JobLock(const JobLock&) = delete;
+  JobLock& operator=(const JobLock&) = delete;
+  bool acquired() const { return held_; }
+
+ private:
+  int fd_;
+  bool held_ = false;
+};
 
 /// The record of a finished job, or null when it has not run with these options.
 ordered_json recordOf(const ManifestJob& job, const fs::path& jobs) {
@@ -252,7 +274,6 @@ BatchReport runBatch(const BatchOptions& o) {
   for (const ManifestJob& j : all) {
     if (j.index % shard.count != shard.index) continue;
     ++mine;
-    fs::remove_all(jobs / (j.name + ".partial"));  // left by an interrupted run
     const ordered_json r = recordOf(j, jobs);
     if (!r.is_null() && (r["status"] == "ok" || !o.retryFailed)) {
       ++skipped;
@@ -283,6 +304,7 @@ BatchReport runBatch(const BatchOptions& o) {
   std::atomic<std::size_t> next{0}, finished{0}, failed{0};
   std::mutex mutex;
   std::exception_ptr fatal;
+  std::size_t elsewhere = 0;  // jobs another process held or finished meanwhile
   const bool tty = isatty(2) && !o.quiet;
   const auto start = std::chrono::steady_clock::now();
   // On a terminal a progress line; otherwise (a cluster's log) or with --quiet one line per job
@@ -308,6 +330,21 @@ BatchReport runBatch(const BatchOptions& o) {
       tbb::task_arena arena(threadsPerJob);
       for (std::size_t k; (k = next++) < todo.size();) {
         ordered_json r;
+        // One process per job: another batch on the same folder (a resubmitted shard, a
+        // second batch started by hand) runs it, or has run it since this one looked.
+        const JobLock held(jobs / ("." + todo[k]->name + ".lock"));
+        const bool done = [&] {
+          if (!held.acquired()) return true;
+          const ordered_json now = recordOf(*todo[k], jobs);
+          return !now.is_null() && (now["status"] == "ok" || !o.retryFailed);
+        }();
+        if (done) {
+          std::lock_guard<std::mutex> lock(mutex);
+          ++elsewhere;
+          std::fprintf(stderr, "batch: job %s runs or ran in another process: skipped here\n",
+                       todo[k]->name.c_str());
+          continue;
+        }
         try {
           arena.execute([&] { r = runOne(*todo[k], jobs); });
         } catch (...) {
@@ -339,10 +376,19 @@ BatchReport runBatch(const BatchOptions& o) {
   std::snprintf(line, sizeof line,
                 "batch: shard %zu/%zu: %zu jobs: %zu run (%zu failed), %zu already done; %d "
                 "worker(s) x %d thread(s), %.1f s\n",
-                shard.index, shard.count, mine, todo.size(), failed.load(), skipped, workers,
-                threadsPerJob, seconds);
+                shard.index, shard.count, mine, todo.size() - elsewhere, failed.load(),
+                skipped + elsewhere, workers, threadsPerJob, seconds);
   result.text = line;
-  if (shard.count == 1) result.text += mergeRecords(all, out, sys);
+  if (shard.count == 1) {
+    try {
+      result.text += mergeRecords(all, out, sys);
+    } catch (const Error&) {
+      // Jobs still running in another batch on this folder: that one merges when it ends.
+      if (elsewhere == 0) throw;
+      result.text += "batch: not merged: " + std::to_string(elsewhere) +
+                     " job(s) run in another process on this folder, which merges at its end\n";
+    }
+  }
   // Failed jobs, this run's or earlier ones: their errors are in their records.
   for (const ManifestJob& j : all)
     if (j.index % shard.count == shard.index) {

@@ -121,5 +121,27 @@ r2=$?
 check "two at once: both succeed" test "$r1" -eq 0 -a "$r2" -eq 0
 check "two at once: one complete run in the folder" complete "$out"
 
+# Two batches into one folder at once: every job runs once, no failed record but the broken
+# program's, no crash; the merged table holds every job.
+out=$work/batches
+"$engage" batch "$data/../tests/data/batch/manifest.json" --out "$out" --quiet \
+  >"$work/b1.txt" 2>&1 &
+p1=$!
+"$engage" batch "$data/../tests/data/batch/manifest.json" --out "$out" --quiet \
+  >"$work/b2.txt" 2>&1 &
+p2=$!
+wait "$p1"
+r1=$?
+wait "$p2"
+r2=$?
+for r in $r1 $r2; do if [ "$r" -ge 128 ] || [ "$r" -eq 3 ]; then crashes=$((crashes + 1)); fi; done
+runs=$(cat "$work/b1.txt" "$work/b2.txt" | grep -c '^batch: \[')
+jobs=$(ls "$out/jobs" | grep -vc '\.lock$')
+check "two batches: every job run once" test "$runs" -eq "$jobs"
+check "two batches: only the broken program failed" \
+  test "$(grep -l '"status": "failed"' "$out"/jobs/*/job.json | wc -l)" -eq 1
+"$engage" merge "$data/../tests/data/batch/manifest.json" --out "$out" >/dev/null 2>&1
+check "two batches: the merge finds every job" test $? -eq 0
+
 echo "faults: $passed passed, $failed failed (crashes: $crashes)"
 [ "$failed" -eq 0 ] && [ "$crashes" -eq 0 ]
