@@ -32,6 +32,11 @@ void addBatchCommands(CLI::App& app, std::function<int()>& run) {
                   "CPUs to use in all (default: those this process may use: its affinity "
                   "mask and cgroup quota)");
   cmd->add_flag("--retry-failed", o->retryFailed, "run failed jobs again");
+  cmd->add_option("--job", o->job,
+                  "run this job alone (by name; for workflow rules, then `engage merge`)");
+  cmd->add_option("--outputs", o->outputs,
+                  "the jobs' files unless a job says: all, tables (steps.csv, summary.json) or "
+                  "summary (summary.json)");
   cmd->add_option("--units", o->units, "units of batch.csv: mm or in")->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "no progress on the terminal");
   cmd->callback([o, &run] { run = [o] { return runBatchCommand(*o); }; });
@@ -42,6 +47,8 @@ void addBatchCommands(CLI::App& app, std::function<int()>& run) {
   merge->add_option("manifest", m->manifest, "the batch's JSON manifest")->required();
   merge->add_option("--out", m->out, "the batch's output folder")->capture_default_str();
   merge->add_option("--units", m->units, "units of batch.csv: mm or in")->capture_default_str();
+  merge->add_flag("--allow-missing", m->allowMissing,
+                  "write the table of the jobs that ran and list the missing ones");
   merge->add_flag("--quiet", m->quiet,
                   "accepted for symmetry with batch (merge shows no progress)");
   merge->callback([m, &run] {

@@ -41,7 +41,7 @@ using nlohmann::ordered_json;
 
 /// Run one job into DIR/jobs/NAME (through NAME.partial, renamed when complete) and return
 /// its record. A job's failure is its record; it never stops the batch.
-ordered_json runOne(const ManifestJob& job, const fs::path& jobs) {
+ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::string& outputs) {
   const fs::path partial = jobs / (job.name + ".partial"), done = jobs / job.name;
   fs::remove_all(partial);
   fs::create_directories(partial);
@@ -56,6 +56,7 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs) {
     OptionValues values = job.values;
     values["out"] = partial.string();
     values["quiet"] = "true";
+    if (!outputs.empty() && !values.count("outputs")) values["outputs"] = outputs;
     const CompletedRun run = runIntoFolder(makeJob(job.command, values));
     const RunResult& out = run.result;
     const WrittenOutputs& written = run.written;
@@ -155,7 +156,8 @@ Shard parseShard(const std::string& s) {
   }
 }
 
-std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& out, UnitSystem sys) {
+std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& out, UnitSystem sys,
+                         bool allowMissing = false) {
   const fs::path jobs = out / "jobs";
   std::vector<ordered_json> records;
   std::vector<std::string> missing;
@@ -166,11 +168,11 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
     else
       records.push_back(std::move(r));
   }
-  if (!missing.empty()) {
-    std::string list;
-    for (std::size_t i = 0; i < missing.size() && i < 10; ++i)
-      list += (i ? ", " : "") + missing[i];
-    if (missing.size() > 10) list += ", ...";
+  std::string list;
+  for (std::size_t i = 0; i < missing.size() && i < 10; ++i)
+    list += (i ? ", " : "") + missing[i];
+  if (missing.size() > 10) list += ", ...";
+  if (!missing.empty() && !allowMissing) {
     throw Error(std::to_string(missing.size()) + " of " + std::to_string(all.size()) +
                 " jobs have not run in '" + out.string() + "': " + list +
                 " (run their shards, then merge again)");
@@ -216,6 +218,7 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
   j["jobs"] = records.size();
   j["ok"] = ok;
   j["failed"] = records.size() - ok;
+  j["missing"] = missing;
   j["units_of_csv"] = {{"volume", std::string(unitLabel(Dimension::Volume, sys))},
                        {"mrr", std::string(unitLabel(Dimension::VolumeRate, sys))}};
   j["records"] = summary;
@@ -225,7 +228,11 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
   std::snprintf(line, sizeof line,
                 "merged %zu jobs (%zu ok, %zu failed) into %s/batch.csv, batch.json\n",
                 records.size(), ok, records.size() - ok, out.string().c_str());
-  return line;
+  std::string text = line;
+  if (!missing.empty())
+    text += std::to_string(missing.size()) + " of " + std::to_string(all.size()) +
+            " jobs have not run and are missing from the table: " + list + "\n";
+  return text;
 }
 
 UnitSystem unitsOf(const std::string& u) {
@@ -261,6 +268,13 @@ BatchReport runBatch(const BatchOptions& o) {
   const Shard shard = parseShard(o.shard);
   const UnitSystem sys = unitsOf(o.units);
   if (o.workers < 0) throw ParameterError("--workers must not be negative");
+  if (!o.job.empty()) {
+    if (!o.shard.empty()) throw ParameterError("give either --job or --shard");
+    if (std::none_of(all.begin(), all.end(), [&](const ManifestJob& j) { return j.name == o.job; }))
+      throw ParameterError("--job: no job named '" + o.job + "' in " + o.manifest);
+  }
+  if (!o.outputs.empty() && o.outputs != "all" && o.outputs != "tables" && o.outputs != "summary")
+    throw ParameterError("--outputs: expected all, tables or summary, found '" + o.outputs + "'");
   const fs::path out(o.out), jobs = out / "jobs";
   // Checked before any job runs; kept whatever happens next: a batch resumes from what its
   // jobs left.
@@ -272,7 +286,7 @@ BatchReport runBatch(const BatchOptions& o) {
   std::vector<const ManifestJob*> todo;
   std::size_t skipped = 0, mine = 0;
   for (const ManifestJob& j : all) {
-    if (j.index % shard.count != shard.index) continue;
+    if (!o.job.empty() ? j.name != o.job : j.index % shard.count != shard.index) continue;
     ++mine;
     const ordered_json r = recordOf(j, jobs);
     if (!r.is_null() && (r["status"] == "ok" || !o.retryFailed)) {
@@ -346,7 +360,7 @@ BatchReport runBatch(const BatchOptions& o) {
           continue;
         }
         try {
-          arena.execute([&] { r = runOne(*todo[k], jobs); });
+          arena.execute([&] { r = runOne(*todo[k], jobs, o.outputs); });
         } catch (...) {
           // A job's own failure is its record; this is the batch's (its record cannot be
           // written: a full disk, say). The batch stops and reports it, it does not crash.
@@ -379,7 +393,7 @@ BatchReport runBatch(const BatchOptions& o) {
                 shard.index, shard.count, mine, todo.size() - elsewhere, failed.load(),
                 skipped + elsewhere, workers, threadsPerJob, seconds);
   result.text = line;
-  if (shard.count == 1) {
+  if (shard.count == 1 && o.job.empty()) {
     try {
       result.text += mergeRecords(all, out, sys);
     } catch (const Error&) {
@@ -400,7 +414,7 @@ BatchReport runBatch(const BatchOptions& o) {
 }
 
 std::string mergeBatch(const BatchOptions& o) {
-  return mergeRecords(readManifest(o.manifest), o.out, unitsOf(o.units));
+  return mergeRecords(readManifest(o.manifest), o.out, unitsOf(o.units), o.allowMissing);
 }
 
 }  // namespace engage

@@ -31,7 +31,10 @@ struct BatchOptions {
   int threads = 0;    ///< CPUs to use in all; 0: usableCpus()
   bool retryFailed = false;
   bool quiet = false;
-  std::string units = "mm";  ///< of batch.csv
+  std::string units = "mm";   ///< of batch.csv
+  std::string outputs;        ///< the jobs' files (all, tables, summary) unless a job says
+  std::string job;            ///< run this job alone (by name), e.g. from a workflow rule
+  bool allowMissing = false;  ///< merge: write the table of the jobs that ran, list the others
 };
 
 /// What a batch run tells its user.

@@ -201,6 +201,10 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   job.stockModel = text("stock-model") == "dexel" ? StockModel::Dexel : StockModel::Voxel;
   if (!stock.empty()) job.stock = parseStock(stock, sys);
   job.out = text("out");
+  const std::string outputs = text("outputs");
+  job.outputs = outputs == "tables"    ? Job::Outputs::Tables
+                : outputs == "summary" ? Job::Outputs::Summary
+                                       : Job::Outputs::All;
   // The re-fed program goes into --out under the program's own name: never over the program.
   if (job.scheduling()) {
     namespace fs = std::filesystem;

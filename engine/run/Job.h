@@ -52,7 +52,10 @@ struct Job {
   bool materialOnRight = true;
   std::string materialSide;  ///< as typed ("" = default right)
   std::string out = "out";   ///< output folder
-  bool quiet = false;        ///< no progress on the terminal
+  /// Which files to write: all; tables (steps.csv, summary.json, the re-fed program); summary
+  /// (summary.json, the re-fed program): a batch of ten thousand programs fits a quota.
+  enum class Outputs { All, Tables, Summary } outputs = Outputs::All;
+  bool quiet = false;  ///< no progress on the terminal
   std::string progressLabel = "simulate";
 
   bool scheduling() const { return command == JobCommand::Schedule; }

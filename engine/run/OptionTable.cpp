@@ -96,6 +96,9 @@ std::vector<OptionInfo> makeTable() {
       plain("cross-check-tolerance", K::Fraction, G::Simulation, "0.03",
             "relative per-step difference allowed by --cross-check"),
       commandLineOnly(plain("out", K::Text, G::Output, "out", "output folder")),
+      choice("outputs", G::Output, {"all", "tables", "summary"}, "all",
+             "files to write: all; tables (steps.csv, summary.json, the re-fed program); "
+             "summary (summary.json, the re-fed program)"),
       commandLineOnly(plain("quiet", K::Flag, G::Output, "", "no progress on the terminal")),
       scheduleOnly(plain("target-mrr", K::Text, G::Schedule, "auto",
                          "target MRR, e.g. 18000mm3/min, or auto")),

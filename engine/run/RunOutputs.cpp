@@ -35,10 +35,14 @@ PlotSpec plotSpec(const RunResult& result, const std::filesystem::path& dir) {
 
 WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::path& dir) {
   WrittenOutputs w;
-  writeAtomically(dir / "steps.csv", stepsTable(result));
+  const Job::Outputs which = result.job.outputs;
+  w.steps = which != Job::Outputs::Summary;
+  if (w.steps) writeAtomically(dir / "steps.csv", stepsTable(result));
   writeAtomically(dir / "summary.json", summaryJson(result));
   writeRefedProgram(result, dir);
   w.refedProgram = result.job.scheduling();
+  if (which != Job::Outputs::All) return w;
+  w.stockFiles = result.stock != nullptr;
   // gnuplot draws in its own process while the stock files are written (seconds each on a
   // fine grid); its outcome is collected below.
   const PlotSpec ps = plotSpec(result, dir);

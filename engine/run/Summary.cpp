@@ -281,8 +281,9 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
     plotted += "," + f;
   if (written.refedProgram)
     programName = "," + std::filesystem::path(job.program).filename().string();
-  appendf(report, "wrote %s/{steps.csv,summary.json%s%s%s}\n", job.out.c_str(),
-          result.stock ? ",removed.vdb,stock.vdb,stock.stl" : "", programName.c_str(),
+  appendf(report, "wrote %s/{%ssummary.json%s%s%s}\n", job.out.c_str(),
+          written.steps ? "steps.csv," : "",
+          written.stockFiles ? ",removed.vdb,stock.vdb,stock.stl" : "", programName.c_str(),
           plotted.c_str());
   return report;
 }

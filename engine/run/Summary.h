@@ -20,6 +20,8 @@ struct WrittenOutputs {
   std::vector<std::string> plots;  ///< PNG files drawn (names without the folder)
   std::size_t openEdges = 0;       ///< open edges of stock.stl (0: closed)
   bool refedProgram = false;       ///< the re-fed program was written
+  bool steps = true;               ///< steps.csv was written
+  bool stockFiles = false;         ///< removed.vdb, stock.vdb and stock.stl were written
 };
 
 /// The lines `engage simulate` prints (each ending in a newline; warnings start "warning: ").

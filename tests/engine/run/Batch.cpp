@@ -83,3 +83,35 @@ TEST_CASE("a batch runs a job again when its program changes, not otherwise", "[
   CHECK(record["removed_mm3"].get<double>() ==
         Approx((180.0 + 3.14159265358979 * 9.0) * 3.0).epsilon(0.002));
 }
+
+TEST_CASE("one job alone, fewer files, and a merge that lists what is missing", "[run]") {
+  test::TempFolder dir("batch_job_outputs");
+  dir.write("a.ngc", test::slotProgram());
+  dir.write("b.ngc", test::slotProgram());
+  const std::string manifest =
+      dir.write("m.json", R"({"defaults": {"tool": "flat", "diameter": "6mm",
+                                 "stock": "box:-10,-10,-10,40,10,0"},
+                    "jobs": [{"program": "a.ngc"}, {"program": "b.ngc"}]})");
+  BatchOptions o;
+  o.manifest = manifest;
+  o.out = (dir.path() / "out").string();
+  o.quiet = true;
+  o.job = "b";
+  o.outputs = "summary";
+  CHECK_THAT(runBatch(o).text, Contains("1 jobs: 1 run"));
+  const auto folder = dir.path() / "out" / "jobs" / "b";
+  CHECK(std::filesystem::exists(folder / "summary.json"));
+  CHECK(std::filesystem::exists(folder / "job.json"));
+  CHECK_FALSE(std::filesystem::exists(folder / "steps.csv"));
+  CHECK_FALSE(std::filesystem::exists(folder / "stock.vdb"));
+  CHECK_FALSE(std::filesystem::exists(dir.path() / "out" / "jobs" / "a"));
+  o.job = "c";
+  CHECK_THROWS_WITH(runBatch(o), Contains("--job: no job named 'c'"));
+  // Job a has not run: a plain merge refuses, --allow-missing writes b's row and names a.
+  o.job.clear();
+  CHECK_THROWS_WITH(mergeBatch(o), Contains("1 of 2 jobs have not run"));
+  o.allowMissing = true;
+  CHECK_THAT(mergeBatch(o), Contains("merged 1 jobs") && Contains("missing from the table: a"));
+  std::ifstream in(dir.path() / "out" / "batch.json");
+  CHECK(nlohmann::json::parse(in)["missing"] == nlohmann::json::array({"a"}));
+}
