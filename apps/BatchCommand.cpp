@@ -13,7 +13,8 @@ int runBatchCommand(const BatchOptions& o) {
   std::fputs(report.text.c_str(), stdout);
   for (const std::string& f : report.failures)
     std::fprintf(stderr, "engage: %s\n", f.c_str());
-  return report.failures.empty() ? 0 : 1;
+  // 4: the batch ran, some jobs failed (their records hold the errors); not a crash (3).
+  return report.failures.empty() ? 0 : 4;
 }
 
 }  // namespace

@@ -11,7 +11,7 @@
 #   ENGAGE may be a command with arguments, e.g. ENGAGE="apptainer exec engage.sif engage"
 #   (compute nodes rarely have Debian's OpenVDB and TBB).
 #
-# A task whose shard holds a failed job exits 1 (the error is in OUT/jobs/NAME/job.json); the
+# A task whose shard holds a failed job exits 4 (the error is in OUT/jobs/NAME/job.json); the
 # merge runs anyway and lists every job. Jobs with a record for the same options and files are
 # not run again, and a job never runs in two tasks at once (a lock per job).
 #

@@ -23,8 +23,8 @@ endfunction()
 
 file(REMOVE_RECURSE ${OUT})
 run(batch ${MANIFEST} --out ${OUT}/whole)
-if(NOT rc EQUAL 1)  # the manifest holds one broken program
-  message(FATAL_ERROR "whole batch: exit ${rc}, expected 1:\n${out}")
+if(NOT rc EQUAL 4)  # the manifest holds one broken program: some jobs failed
+  message(FATAL_ERROR "whole batch: exit ${rc}, expected 4:\n${out}")
 endif()
 foreach(i 0 1 2)
   run(batch ${MANIFEST} --out ${OUT}/sharded --shard ${i}/3)
