@@ -79,12 +79,23 @@ class FolderLock {
   int fd_;
 };
 
-/// Remove staging folders of runs whose process is gone (killed before publishing).
+/// The prefix of this host's staging folders: ".engage-partial-HOST-" (a folder shared by
+/// several hosts holds each one's; only this host's processes can be checked for life).
+std::string stagingPrefix() {
+  char host[256] = {};
+  if (::gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+  std::string name(host);
+  for (char& c : name)
+    if (c == '/' || c == '-') c = '_';
+  return ".engage-partial-" + name + "-";
+}
+
+/// Remove this host's staging folders whose process is gone (killed before publishing).
 void removeDeadStagings(const fs::path& out) {
   std::error_code ec;
+  const std::string prefix = stagingPrefix();
   for (const auto& e : fs::directory_iterator(out, ec)) {
     const std::string name = e.path().filename().string();
-    const std::string prefix = ".engage-partial-";
     if (name.rfind(prefix, 0) != 0) continue;
     const long pid = std::strtol(name.c_str() + prefix.size(), nullptr, 10);
     if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)
@@ -96,7 +107,7 @@ void removeDeadStagings(const fs::path& out) {
 
 StagedOutputs::StagedOutputs(const fs::path& out) : out_(out) {
   removeDeadStagings(out);
-  staging_ = out / (".engage-partial-" + std::to_string(::getpid()));
+  staging_ = out / (stagingPrefix() + std::to_string(::getpid()));
   std::error_code ec;
   fs::remove_all(staging_, ec);
   fs::create_directories(staging_, ec);

@@ -33,12 +33,12 @@ class OutputDirectory {
 };
 
 /// A run's files, written into a staging folder inside the output folder
-/// (OUT/.engage-partial-PID) and moved into OUT only when every one is complete (publish). The
+/// (OUT/.engage-partial-HOST-PID) and moved into OUT only when every one is complete (publish). The
 /// files of an earlier run in OUT (listed in its OUT/.engage-files, and engage's own file names)
 /// are removed first, summary.json is removed first and moved in last: a folder with a
 /// summary.json holds one complete run, never a mix and never a half-written file, whatever
 /// kills the process when. Publishing holds a lock on OUT (flock), so two runs into one folder
-/// publish one after the other. Staging folders of runs that died are removed.
+/// publish one after the other. Staging folders of this host's runs that died are removed.
 class StagedOutputs {
  public:
   /// Makes the staging folder in `out` (which exists). Throws Error.

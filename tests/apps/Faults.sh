@@ -33,7 +33,7 @@ complete() {  # the folder holds one complete run
   [ "$(wc -l <"$d/steps.csv")" -eq $((steps + 1)) ]
 }
 nothing_or_complete() { [ ! -f "$1/summary.json" ] || complete "$1"; }
-# (a killed run's hidden staging folder, .engage-partial-PID, is removed by the next run)
+# (a killed run's hidden staging folder, .engage-partial-HOST-PID, is removed by the next run)
 no_part_files() { ! ls -A "$1" | grep -q '\.part'; }
 says() { grep -q "$1" "$work/err.txt"; }
 absent() { [ ! -e "$1" ]; }

@@ -8,6 +8,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <unistd.h>
+
 #include <filesystem>
 
 using namespace engage;
@@ -22,11 +24,21 @@ TEST_CASE("publishing replaces an earlier run's files and moves summary.json las
   dir.write("part.ngc", "old re-fed program");
   dir.write(".engage-files", "feed.png\npart.ngc\nsummary.json\n");
   dir.write("notes.txt", "the user's own file");
-  // The staging folder of a run that died (no process has this pid: above pid_max's default).
-  fs::create_directories(out / ".engage-partial-2147483646");
+  // The staging folder of a run on this host that died (no process has this pid: above
+  // pid_max's default), and one of another host's run, which only that host can judge.
+  char host[256] = {};
+  ::gethostname(host, sizeof host - 1);
+  std::string name(host);
+  for (char& c : name)
+    if (c == '/' || c == '-') c = '_';
+  const std::string dead = ".engage-partial-" + name + "-2147483646";
+  fs::create_directories(out / dead);
+  fs::create_directories(out / ".engage-partial-otherhost-1");
   {
     StagedOutputs staged(out);
-    CHECK_FALSE(fs::exists(out / ".engage-partial-2147483646"));
+    CHECK_FALSE(fs::exists(out / dead));
+    CHECK(fs::exists(out / ".engage-partial-otherhost-1"));
+    fs::remove_all(out / ".engage-partial-otherhost-1");
     writeAtomically(staged.staging() / "steps.csv", "step\n");
     writeAtomically(staged.staging() / "summary.json", "new");
     // Before publishing, the folder still holds the earlier run, whole.
