@@ -59,6 +59,12 @@ struct Job {
   std::string progressLabel = "simulate";
 
   bool scheduling() const { return command == JobCommand::Schedule; }
+  /// The step length L the simulation uses, mm: --step, else simulate()'s default (2.5 voxels)
+  /// with a stock, analyticSteps()'s (D/10) without one.
+  double stepLength() const {
+    if (simulation.stepLength > 0.0) return simulation.stepLength;
+    return stock.none() ? 2.0 * cutter.radius() / 10.0 : 2.5 * voxel;
+  }
   /// The other stock model, for the cross-check.
   StockModel otherModel() const {
     return stockModel == StockModel::Voxel ? StockModel::Dexel : StockModel::Voxel;

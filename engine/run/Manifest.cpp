@@ -61,7 +61,7 @@ std::string contentHash(const std::string& path) {
 
 /// One job of the manifest, checked and with its files resolved against `base`.
 ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs::path& base,
-                    const std::string& where) {
+                    const std::string& where, std::map<std::string, std::string>& hashes) {
   if (!j.is_object()) throw Error(where + ": expected an object");
   json spec = defaults;
   spec.update(j);
@@ -97,10 +97,16 @@ ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs
   // The job is its options and the content of its files: an edited program, stock mesh or
   // tool table runs again, an unchanged one is not run twice.
   json content = json::object();
-  for (const char* key : {"program", "stock", "tool-table"})
-    if (job.values.count(key) &&
-        !(std::string(key) == "stock" && job.values.at(key).rfind("box:", 0) == 0))
-      content[key] = contentHash(job.values.at(key));
+  for (const char* key : {"program", "stock", "tool-table"}) {
+    if (!job.values.count(key) ||
+        (std::string(key) == "stock" && job.values.at(key).rfind("box:", 0) == 0))
+      continue;
+    // Many jobs of a large batch share one program: each file is read and hashed once.
+    const std::string& file = job.values.at(key);
+    auto it = hashes.find(file);
+    if (it == hashes.end()) it = hashes.emplace(file, contentHash(file)).first;
+    content[key] = it->second;
+  }
   spec["content"] = content;
   job.specJson = spec.dump();
   return job;
@@ -142,10 +148,11 @@ std::vector<ManifestJob> readManifest(const std::string& manifest) {
   const fs::path real = fs::weakly_canonical(fs::absolute(path), ec);
   const fs::path base = (ec ? fs::absolute(path) : real).parent_path();
   std::vector<ManifestJob> jobs;
+  std::map<std::string, std::string> hashes;  // file -> its content hash
   std::map<std::string, std::size_t> names;
   for (std::size_t i = 0; i < m["jobs"].size(); ++i) {
     const std::string where = path.string() + ": job " + std::to_string(i + 1);
-    ManifestJob job = readJob(m["jobs"][i], defaults, i, base, where);
+    ManifestJob job = readJob(m["jobs"][i], defaults, i, base, where, hashes);
     if (names.count(job.name))
       throw Error(where + ": the name \"" + job.name + "\" is taken by job " +
                   std::to_string(names[job.name] + 1) + "; give the jobs distinct \"name\"s");

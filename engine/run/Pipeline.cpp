@@ -76,10 +76,7 @@ CrossCheck crossCheck(const Job& job, const SimulationResult& r, Stock& other) {
 
 PreparedRun prepareRun(Job job) {
   // Bounded work: a move of 1e9 mm or a helix of 100000 turns is refused before anything.
-  const double L = job.simulation.stepLength > 0.0 ? job.simulation.stepLength
-                   : job.stock.none()              ? 2.0 * job.cutter.radius() / 10.0
-                                                   : 2.5 * job.voxel;
-  checkStepCount(job.path, L, job.simulation.maxSteps);
+  checkStepCount(job.path, job.stepLength(), job.simulation.maxSteps);
   PreparedRun run;
   if (!job.stock.none()) {
     run.stock = makeStock(job.stock, job.stockModel, job.voxel);
