@@ -41,7 +41,8 @@ void addToolOptions(CLI::App& cmd, ToolOptions& t, bool required) {
                                                       {"bottom-angle", &t.bottomAngle},
                                                       {"flute-length", &t.fluteLength}};
   for (const OptionInfo& o : jobOptions()) {
-    if (o.group != OptionGroup::Tool) continue;
+    // analyze studies one cutter: a tool library belongs to the job commands.
+    if (o.group != OptionGroup::Tool || o.name == "tools") continue;
     if (o.name == "flutes") {
       cmd.add_option("--flutes", t.flutes, o.help)->capture_default_str();
       continue;

@@ -70,6 +70,7 @@ py::dict stepColumns(const RunResult& r) {
   d["step"] = column<long>(n, [](std::size_t i) { return static_cast<long>(i); });
   d["move"] = column<long>(n, [&](std::size_t i) { return static_cast<long>(s[i].move); });
   d["line"] = column<long>(n, [&](std::size_t i) { return static_cast<long>(s[i].line); });
+  d["tool"] = column<long>(n, [&](std::size_t i) { return static_cast<long>(s[i].tool); });
   d["kind"] = textColumn(n, [&](std::size_t i) { return moveKindName(s[i].kind); });
   d["arc_length_mm"] = column<double>(n, [&](std::size_t i) { return s[i].arcLength; });
   d["length_mm"] = column<double>(n, [&](std::size_t i) { return s[i].length; });

@@ -910,8 +910,10 @@ class Interpreter final : public gcode::ParameterSource {
       }
       params_[5403] = toolLength_ / unit();
       // LinuxCNC re-reads the position after a tool change (M6) on the same line, so the
-      // shift applies only without one.
-      if (!w.hasM(60)) pos_.z() -= toolLength_ - previousLength;
+      // shift applies only without one. Before the first move the position is an assumption
+      // (the program origin), not where a homed spindle is: shifting it by a 40 mm tool
+      // length would start the program 40 mm inside the stock and sweep a phantom plunge.
+      if (!w.hasM(60) && !out_.moves.empty()) pos_.z() -= toolLength_ - previousLength;
     }
     if (const auto g = w.gIn(12)) {
       static const std::map<int, int> systems{{540, 1}, {550, 2}, {560, 3}, {570, 4}, {580, 5},

@@ -88,17 +88,6 @@ class Report {
   std::vector<Row> rows_;
 };
 
-std::string describeCutter(const AptCutter& c, UnitSystem sys) {
-  const AptParameters& p = c.parameters();
-  auto L = [&](double v) { return formatQuantity(v, Dimension::Length, sys); };
-  auto A = [&](double v) { return formatQuantity(v, Dimension::Angle, sys); };
-  return std::string(shapeName(c.shape())) + ": D " + L(2.0 * p.radius) + ", r_tc " +
-         L(p.cornerRadius) + ", e " + L(p.cornerCenterRadial) + ", h_tc " +
-         L(p.cornerCenterHeight) + ", beta " + A(p.taperAngleRad) + ", delta " +
-         A(p.bottomAngleRad) + ", h " + L(p.height) + ", " + std::to_string(c.fluteCount()) +
-         " flutes";
-}
-
 PathSide parseSide(const std::string& side) {
   if (side == "concave") return PathSide::Concave;
   if (side == "convex") return PathSide::Convex;

@@ -77,6 +77,17 @@ AptCutter buildCutter(const ToolOptions& o, UnitSystem bare) {
   return AptCutter::fromApt(p, o.flutes, CutterShape::General);
 }
 
+std::string describeCutter(const AptCutter& c, UnitSystem sys) {
+  const AptParameters& p = c.parameters();
+  auto L = [&](double v) { return formatQuantity(v, Dimension::Length, sys); };
+  auto A = [&](double v) { return formatQuantity(v, Dimension::Angle, sys); };
+  return std::string(shapeName(c.shape())) + ": D " + L(2.0 * p.radius) + ", r_tc " +
+         L(p.cornerRadius) + ", e " + L(p.cornerCenterRadial) + ", h_tc " +
+         L(p.cornerCenterHeight) + ", beta " + A(p.taperAngleRad) + ", delta " +
+         A(p.bottomAngleRad) + ", h " + L(p.height) + ", " + std::to_string(c.fluteCount()) +
+         " flutes";
+}
+
 UnitSystem chooseUnitSystem(const std::string& unitsOption,
                             const std::vector<std::pair<std::string, Dimension>>& typed) {
   if (unitsOption == "mm") return UnitSystem::Metric;

@@ -30,6 +30,9 @@ struct ToolOptions {
 /// e.g. when an option does not fit the tool ("--corner-radius applies to bull and apt").
 AptCutter buildCutter(const ToolOptions& options, UnitSystem bare);
 
+/// One line for a cutter: its shape and APT parameters ("flat: D 6 mm, r_tc 0 mm, ...").
+std::string describeCutter(const AptCutter& cutter, UnitSystem sys);
+
 /// The report unit system: --units if given ("mm" or "in"; anything else throws UnitError),
 /// else the system of the first value in `typed` whose suffix names one, else metric.
 UnitSystem chooseUnitSystem(const std::string& unitsOption,

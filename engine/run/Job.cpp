@@ -79,7 +79,7 @@ StockSpec parseStock(const std::string& text, UnitSystem sys) {
 }
 
 /// The schedule's settings (schedule jobs only).
-ScheduleOptions scheduleOptions(const OptionValues& values, UnitSystem sys, double diameter) {
+ScheduleOptions scheduleOptions(const OptionValues& values, UnitSystem sys, const Job& job) {
   auto text = [&](const char* name) { return optionText(values, name); };
   // Limits and feeds: none is negative (0 means "none" or "the programmed").
   auto quantity = [&](const char* name, Dimension d) {
@@ -113,11 +113,79 @@ ScheduleOptions scheduleOptions(const OptionValues& values, UnitSystem sys, doub
     if (target != "auto") throw ParameterError("give either --target-mrr or --force-limit");
     if (text("specific-energy").empty() || text("spindle").empty())
       throw ParameterError("--force-limit needs --specific-energy and --spindle (paper Eq 17-18)");
-    s.targetMrr = mrrForForce(quantity("force-limit", Dimension::Force),
-                              quantity("specific-energy", Dimension::SpecificEnergy), diameter,
-                              quantity("spindle", Dimension::SpindleSpeed));
+    // Each tool's target from its own diameter.
+    auto targetFor = [&](const AptCutter& c) {
+      return mrrForForce(quantity("force-limit", Dimension::Force),
+                         quantity("specific-energy", Dimension::SpecificEnergy), 2.0 * c.radius(),
+                         quantity("spindle", Dimension::SpindleSpeed));
+    };
+    s.targetMrr = targetFor(job.cutter);
+    for (const auto& [tool, cutter] : job.cutters.byTool)
+      s.targetByTool[tool] = targetFor(cutter);
   }
   return s;
+}
+
+/// The tools a program loads, in order, each with the first line that runs with it.
+std::vector<std::pair<int, int>> toolChanges(const Toolpath& path) {
+  std::vector<std::pair<int, int>> changes;
+  int current = 0;
+  for (const Move& m : path.moves)
+    if (m.tool != current) {
+      current = m.tool;
+      if (current != 0) changes.emplace_back(current, m.line);
+    }
+  return changes;
+}
+
+/// The cutters of the job's moves: one --tool for all, or the library's per T number.
+void chooseCutters(Job& job, const std::optional<ToolLibrary>& lib,
+                   const std::optional<AptCutter>& single) {
+  const auto changes = toolChanges(job.path);
+  if (!lib) {
+    if (!single) throw ParameterError("--tool is required (or --tools FILE, a tool library)");
+    std::vector<int> numbers;
+    std::string list;
+    for (const auto& [tool, line] : changes)
+      if (std::find(numbers.begin(), numbers.end(), tool) == numbers.end()) {
+        numbers.push_back(tool);
+        list += (list.empty() ? "" : ", ") +
+                ("T" + std::to_string(tool) + " from line " + std::to_string(line));
+      }
+    if (numbers.size() > 1)
+      throw ParameterError(job.program + ": the program changes tools (" + list +
+                           ") and --tool gives one cutter for all of them: give the tool "
+                           "library with --tools FILE");
+    job.cutters.fallback = *single;
+    job.cutter = *single;
+    return;
+  }
+  job.toolsFormat = lib->format;
+  if (changes.empty() && !single)
+    throw ParameterError(job.program +
+                         ": the program loads no tool (no T.. M6 or M61 Q..): give --tool for "
+                         "the tool in the spindle");
+  for (const auto& [tool, line] : changes) {
+    if (job.tools.count(tool)) continue;
+    try {
+      const ToolEntry& e = lib->require(tool);
+      job.tools.emplace(tool, e);
+      job.cutters.byTool.emplace(tool, *e.cutter);
+    } catch (const ParameterError& err) {
+      throw ParameterError(job.program + ":" + std::to_string(line) + ": T" + std::to_string(tool) +
+                           ": " + err.what());
+    }
+  }
+  // Moves before the first change run with --tool, else with the program's first tool.
+  if (single) {
+    job.cutters.byTool.emplace(0, *single);
+  } else {
+    job.startTool = changes.front().first;
+    job.cutters.byTool.emplace(0, job.cutters.byTool.at(job.startTool));
+  }
+  job.cutter = job.cutters.byTool.begin()->second;
+  for (const auto& [tool, c] : job.cutters.byTool)
+    if (c.radius() < job.cutter.radius()) job.cutter = c;
 }
 
 }  // namespace
@@ -147,6 +215,15 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   ReaderOptions ro;
   ro.toolTable = text("tool-table");
   ro.toolTableInch = text("tool-table-units") == "in";
+  std::optional<ToolLibrary> library;
+  job.toolsFile = text("tools");
+  if (!job.toolsFile.empty()) {
+    ToolLibraryOptions lo;
+    lo.linuxcncInch = ro.toolTableInch;
+    library = readToolLibrary(job.toolsFile, lo);
+    // A LinuxCNC table is also the machine's tool lengths (G43), unless --tool-table says.
+    if (library->format == "linuxcnc" && ro.toolTable.empty()) ro.toolTable = job.toolsFile;
+  }
   const int maxMoves = wholeNumber(text("max-moves"), "--max-moves");
   const int maxSteps = wholeNumber(text("max-steps"), "--max-steps");
   if (maxMoves < 1) throw ParameterError("--max-moves must be positive");
@@ -166,7 +243,18 @@ Job makeJob(JobCommand command, const OptionValues& values) {
                    text("tip-angle"),     text("bottom-angle"),
                    text("flute-length"),  wholeNumber(text("flutes"), "--flutes")};
   job.toolText = tool.tool;
-  job.cutter = buildCutter(tool, sys);
+  std::optional<AptCutter> single;
+  if (!tool.tool.empty()) {
+    if (tool.diameter.empty()) throw ParameterError("--diameter is required with --tool");
+    single = buildCutter(tool, sys);
+  } else {
+    for (const char* name :
+         {"diameter", "corner-radius", "taper-angle", "tip-angle", "bottom-angle", "flute-length"})
+      if (!text(name).empty())
+        throw ParameterError("--" + std::string(name) +
+                             " describes the --tool cutter; give --tool");
+  }
+  chooseCutters(job, library, single);
   const std::string voxel = text("voxel");
   job.voxel = voxel.empty() ? 2.0 * job.cutter.radius() / 20.0
                             : parseQuantity(voxel, Dimension::Length, sys, "--voxel").value;
@@ -180,7 +268,7 @@ Job makeJob(JobCommand command, const OptionValues& values) {
     so.stepover = parseQuantity(text("stepover"), Dimension::Length, sys, "--stepover").value;
   if (!text("depth").empty())
     so.depth = parseQuantity(text("depth"), Dimension::Length, sys, "--depth").value;
-  if (job.scheduling()) job.schedule = scheduleOptions(values, sys, 2.0 * job.cutter.radius());
+  if (job.scheduling()) job.schedule = scheduleOptions(values, sys, job);
   const bool analytic = job.scheduling() && text("model") == "analytic";
   job.materialSide = text("material-side");
   job.materialOnRight = job.materialSide != "left";

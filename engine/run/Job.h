@@ -12,8 +12,10 @@
 #include "engine/run/OptionTable.h"
 #include "engine/schedule/FeedScheduler.h"
 #include "engine/sim/Simulation.h"
+#include "engine/tools/ToolLibrary.h"
 #include "engine/units/Quantity.h"
 
+#include <map>
 #include <optional>
 #include <string>
 
@@ -39,7 +41,17 @@ struct Job {
   std::string program;   ///< the program's path, as given
   Toolpath path;         ///< the program, read
   std::string toolText;  ///< the --tool value, as typed (summary.json)
+  /// The single cutter (--tool), or with --tools the program's tool of the smallest radius
+  /// (the default voxel and step follow it).
   AptCutter cutter = AptCutter::flat(1.0, 1.0);
+  std::string toolsFile;    ///< --tools, as given ("" for none)
+  std::string toolsFormat;  ///< its format: linuxcnc, fusion360, freecad, camotics
+  /// With --tools: the library's entries of the tools the program loads, by number.
+  std::map<int, ToolEntry> tools;
+  /// With --tools and no --tool: the tool taken to be in the spindle before the program's
+  /// first change (its first tool), 0 otherwise.
+  int startTool = 0;
+  CutterSet cutters;  ///< the cutter of every move's tool
   StockSpec stock;
   StockModel stockModel = StockModel::Voxel;
   UnitSystem units = UnitSystem::Metric;  ///< of the reports (and of bare numbers)
@@ -63,7 +75,7 @@ struct Job {
   /// with a stock, analyticSteps()'s (D/10) without one.
   double stepLength() const {
     if (simulation.stepLength > 0.0) return simulation.stepLength;
-    return stock.none() ? 2.0 * cutter.radius() / 10.0 : 2.5 * voxel;
+    return stock.none() ? 2.0 * cutters.smallestRadius() / 10.0 : 2.5 * voxel;
   }
   /// The other stock model, for the cross-check.
   StockModel otherModel() const {

@@ -41,11 +41,6 @@ OptionInfo scheduleOnly(OptionInfo o) {
   return o;
 }
 
-OptionInfo required(OptionInfo o) {
-  o.required = true;
-  return o;
-}
-
 OptionInfo commandLineOnly(OptionInfo o) {
   o.commandLineOnly = true;
   return o;
@@ -56,12 +51,16 @@ std::vector<OptionInfo> makeTable() {
   using G = OptionGroup;
   using K = OptionKind;
   return {
-      required(choice("tool", G::Tool,
-                      {"flat", "ball", "bull", "taper", "tapered-ball", "chamfer", "apt"}, "",
-                      "cutter: flat, ball, bull, taper, tapered-ball, chamfer, apt")),
-      required(quantity("diameter", G::Tool, D::Length,
-                        "cutter diameter D (tip diameter of a taper, ball diameter of a tapered "
-                        "ball), e.g. 12mm")),
+      choice("tool", G::Tool, {"flat", "ball", "bull", "taper", "tapered-ball", "chamfer", "apt"},
+             "",
+             "cutter: flat, ball, bull, taper, tapered-ball, chamfer, apt (with --tools: the "
+             "tool in the spindle before the program's first tool change)"),
+      quantity("diameter", G::Tool, D::Length,
+               "cutter diameter D (tip diameter of a taper, ball diameter of a tapered ball), "
+               "e.g. 12mm"),
+      plain("tools", K::Text, G::Tool, "",
+            "tool library giving each T number its cutter: LinuxCNC table, Fusion 360 JSON, "
+            "FreeCAD .fctl/.fctb, CAMotics project"),
       quantity("corner-radius", G::Tool, D::Length, "corner radius r_tc (bull, apt)"),
       quantity("taper-angle", G::Tool, D::Angle,
                "side angle beta to the tool axis (taper, tapered-ball, apt), e.g. 30deg"),

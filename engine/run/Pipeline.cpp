@@ -31,13 +31,13 @@ std::unique_ptr<Stock> makeStock(const StockSpec& spec, StockModel model, double
 /// Throws when no move of the path comes near the stock: a wrong box or wrong units.
 void checkReach(const Job& job, const Stock& stock) {
   const Box3 sb = stock.bounds();
-  const double w = job.cutter.maxRadius();
   for (const Move& m : job.path.moves) {
+    const AptCutter& cutter = job.cutters.of(m.tool);
     // An arc can bulge up to its diameter beyond its end points.
-    const double reach = w + (m.kind == MoveKind::Arc ? 2.0 * arcRadius(m) : 0.0);
+    const double reach = cutter.maxRadius() + (m.kind == MoveKind::Arc ? 2.0 * arcRadius(m) : 0.0);
     const Eigen::Vector3d lo = m.start.cwiseMin(m.end) - Eigen::Vector3d(reach, reach, 0.0);
     const Eigen::Vector3d hi =
-        m.start.cwiseMax(m.end) + Eigen::Vector3d(reach, reach, job.cutter.height());
+        m.start.cwiseMax(m.end) + Eigen::Vector3d(reach, reach, cutter.height());
     if ((lo.array() <= sb.max.array()).all() && (hi.array() >= sb.min.array()).all()) return;
   }
   const UnitSystem sys = job.units;
@@ -51,7 +51,7 @@ CrossCheck crossCheck(const Job& job, const SimulationResult& r, Stock& other) {
   CrossCheck c;
   SimulationOptions oo = job.simulation;
   oo.progress = nullptr;
-  c.other = simulate(job.path, job.cutter, other, oo);
+  c.other = simulate(job.path, job.cutters, other, oo);
   c.floorVolume = 4.0 * job.voxel * job.voxel * job.voxel;
   c.differs.assign(r.steps.size(), 0);
   for (std::size_t i = 0; i < r.steps.size(); ++i) {
@@ -96,8 +96,8 @@ RunResult executeRun(PreparedRun run, const ProgressFunction& progress) {
   const Job& job = r.job;
   SimulationOptions so = job.simulation;
   so.progress = progress;
-  r.sim = r.stock ? simulate(job.path, job.cutter, *r.stock, so)
-                  : analyticSteps(job.path, job.cutter, so, job.materialOnRight);
+  r.sim = r.stock ? simulate(job.path, job.cutters, *r.stock, so)
+                  : analyticSteps(job.path, job.cutters, so, job.materialOnRight);
   if (job.crossCheck && run.other) {
     r.cross = crossCheck(job, r.sim, *run.other);
     r.crossChecked = true;

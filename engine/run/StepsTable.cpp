@@ -31,8 +31,8 @@ std::string stepsTable(const RunResult& result) {
   const std::string A(unitTag(Dimension::Acceleration, sys));
   auto D = [&](double v, Dimension d) { return formatNumber(toDisplay(v, d, sys)); };
   std::string csv =
-      "step,move,line,kind,arc_length_" + L + ",x_" + L + ",y_" + L + ",z_" + L + ",feed_" + F +
-      ",dt_s,removed_" + V + ",mrr_" + Q + ",width_" + L + ",depth_" + L +
+      "step,move,line,tool,kind,arc_length_" + L + ",x_" + L + ",y_" + L + ",z_" + L + ",feed_" +
+      F + ",dt_s,removed_" + V + ",mrr_" + Q + ",width_" + L + ",depth_" + L +
       ",engagement_deg,curvature_1_" + L + ",path,mrr_exact_" + Q + ",mrr_paper_" + Q +
       ",voxels_changed" +
       (schedule ? ",feed_scheduled_" + F + ",binding,mrr_scheduled_" + Q + ",acceleration_" + A
@@ -44,15 +44,16 @@ std::string stepsTable(const RunResult& result) {
     const StepRecord& s = steps[i];
     csv +=
         std::to_string(i) + "," + std::to_string(s.move) + "," + std::to_string(s.line) + "," +
-        moveKindName(s.kind) + "," + D(s.arcLength, Dimension::Length) + "," +
-        D(s.end.x(), Dimension::Length) + "," + D(s.end.y(), Dimension::Length) + "," +
-        D(s.end.z(), Dimension::Length) + "," + D(s.feed, Dimension::Feed) + "," +
-        formatNumber(s.dt) + "," + D(s.removed, Dimension::Volume) + "," +
-        D(s.mrr, Dimension::VolumeRate) + "," + D(s.width, Dimension::Length) + "," +
-        D(s.depth, Dimension::Length) + "," + formatNumber(s.engagementRad * 57.29577951308232) +
-        "," + formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," +
-        sideName(s.side) + "," + D(s.mrrExact, Dimension::VolumeRate) + "," +
-        D(s.mrrPaper, Dimension::VolumeRate) + "," + std::to_string(s.voxelsChanged) +
+        std::to_string(s.tool) + "," + moveKindName(s.kind) + "," +
+        D(s.arcLength, Dimension::Length) + "," + D(s.end.x(), Dimension::Length) + "," +
+        D(s.end.y(), Dimension::Length) + "," + D(s.end.z(), Dimension::Length) + "," +
+        D(s.feed, Dimension::Feed) + "," + formatNumber(s.dt) + "," +
+        D(s.removed, Dimension::Volume) + "," + D(s.mrr, Dimension::VolumeRate) + "," +
+        D(s.width, Dimension::Length) + "," + D(s.depth, Dimension::Length) + "," +
+        formatNumber(s.engagementRad * 57.29577951308232) + "," +
+        formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," + sideName(s.side) +
+        "," + D(s.mrrExact, Dimension::VolumeRate) + "," + D(s.mrrPaper, Dimension::VolumeRate) +
+        "," + std::to_string(s.voxelsChanged) +
         (schedule
              ? "," + D(plan.feed[i], Dimension::Feed) + "," + bindingName(plan.binding[i]) + "," +
                    D(s.feed > 0 ? s.mrr * plan.feed[i] / s.feed : 0.0, Dimension::VolumeRate) +

@@ -1,5 +1,6 @@
 #include "engine/run/Summary.h"
 
+#include "engine/run/CutterOptions.h"
 #include "engine/units/Quantity.h"
 
 #include <nlohmann/json.hpp>
@@ -113,6 +114,75 @@ ordered_json scheduleJson(const RunResult& result) {
           {"limited_places", places}};
 }
 
+/// What one tool did in a run.
+struct ToolTotals {
+  double removed = 0.0, time = 0.0, peak = -1.0;
+  std::size_t peakStep = 0, steps = 0;
+  int firstLine = 0;
+};
+
+/// Per tool number the steps ran with: removed volume, cutting time, peak MRR (the analytic one
+/// without a stock).
+std::map<int, ToolTotals> toolTotals(const RunResult& result) {
+  std::map<int, ToolTotals> totals;
+  const auto& steps = result.sim.steps;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const StepRecord& s = steps[i];
+    ToolTotals& t = totals[s.tool];
+    if (t.steps++ == 0) t.firstLine = s.line;
+    if (std::isfinite(s.removed)) t.removed += s.removed;
+    t.time += s.dt;
+    const double load = result.stock ? s.mrr : s.mrrExact;
+    if (std::isfinite(load) && load > t.peak) {
+      t.peak = load;
+      t.peakStep = i;
+    }
+  }
+  return totals;
+}
+
+/// The tool's name: the library's, else --tool's.
+std::string toolName(const Job& job, int tool) {
+  const int number = tool == 0 && job.startTool != 0 ? job.startTool : tool;
+  const auto entry = job.tools.find(number);
+  return entry != job.tools.end() ? entry->second.name : job.toolText;
+}
+
+/// Per tool the program ran with: its cutter, what it removed, its peak MRR, its time.
+ordered_json toolsJson(const RunResult& result) {
+  const Job& job = result.job;
+  const UnitSystem sys = job.units;
+  const auto& steps = result.sim.steps;
+  const std::map<int, ToolTotals> totals = toolTotals(result);
+  ordered_json out = ordered_json::array();
+  for (const auto& [tool, t] : totals) {
+    const auto entry = job.tools.find(tool == 0 && job.startTool != 0 ? job.startTool : tool);
+    ordered_json j{{"number", tool}};
+    if (tool == 0 && job.startTool != 0) j["taken_as"] = job.startTool;
+    j["name"] = toolName(job, tool);
+    if (entry != job.tools.end()) j["defined_at"] = entry->second.origin;
+    j["cutter"] = describeCutter(job.cutters.of(tool), sys);
+    j["first_line"] = t.firstLine;
+    j["steps"] = t.steps;
+    j["removed"] =
+        result.stock ? num(toDisplay(t.removed, Dimension::Volume, sys)) : ordered_json(nullptr);
+    j["cutting_time_s"] = t.time;
+    j["peak_mrr"] = t.peak > 0.0
+                        ? ordered_json{{"value", toDisplay(t.peak, Dimension::VolumeRate, sys)},
+                                       {"step", t.peakStep},
+                                       {"line", steps[t.peakStep].line}}
+                        : ordered_json(nullptr);
+    if (job.scheduling()) {
+      const auto target = result.plan.targets.find(tool);
+      j["target_mrr"] = target != result.plan.targets.end() && target->second > 0.0
+                            ? ordered_json(toDisplay(target->second, Dimension::VolumeRate, sys))
+                            : ordered_json(nullptr);
+    }
+    out.push_back(j);
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string summaryJson(const RunResult& result) {
@@ -124,10 +194,12 @@ std::string summaryJson(const RunResult& result) {
   j["program"] = job.program;
   j["units"] = std::string(systemName(sys));
   j["tool"] = job.toolText;
+  if (!job.toolsFile.empty())
+    j["tool_library"] = {{"file", job.toolsFile}, {"format", job.toolsFormat}};
+  j["tools"] = toolsJson(result);
   j["stock"] = job.stock.text;
   j["voxel"] = toDisplay(job.voxel, Dimension::Length, sys);
-  const double step = job.simulation.stepLength;
-  j["step_length"] = toDisplay(step > 0 ? step : 2.5 * job.voxel, Dimension::Length, sys);
+  j["step_length"] = toDisplay(job.stepLength(), Dimension::Length, sys);
   j["moves"] = job.path.moves.size();
   j["steps"] = r.steps.size();
   j["volume_before"] = toDisplay(r.volumeBefore, Dimension::Volume, sys);
@@ -210,6 +282,20 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
     w.push_back("rapids removed " +
                 formatQuantity(result.sim.rapidRemoved, Dimension::Volume, result.job.units) +
                 " of material (a crash on a machine)");
+  if (job.startTool != 0) {
+    double before = 0.0;
+    int line = 0;
+    for (const StepRecord& s : result.sim.steps)
+      if (s.tool == 0 && std::isfinite(s.removed) && s.removed > 0.0) {
+        before += s.removed;
+        if (line == 0) line = s.line;
+      }
+    if (before > 0.0)
+      w.push_back("moves before the program's first tool change cut " +
+                  formatQuantity(before, Dimension::Volume, job.units) + " (from line " +
+                  std::to_string(line) + ") with T" + std::to_string(job.startTool) +
+                  ", its first tool: give --tool for the tool in the spindle at the start");
+  }
   if (written.openEdges > 0)
     w.push_back("stock.stl has " + std::to_string(written.openEdges) + " open edges");
   return w;
@@ -246,6 +332,13 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
             r.straight.steps, 100 * r.straight.meanRelative, r.concave.steps,
             100 * r.concave.meanRelative, r.convex.steps, 100 * r.convex.meanRelative);
   }
+  if (const auto totals = toolTotals(result); totals.size() > 1)
+    for (const auto& [tool, t] : totals)
+      appendf(report, "  T%d %s: removed %s, peak MRR %s at line %d, cutting time %.1f s\n", tool,
+              toolName(job, tool).c_str(),
+              result.stock ? q(t.removed, Dimension::Volume).c_str() : "-",
+              t.peak > 0.0 ? q(t.peak, Dimension::VolumeRate).c_str() : "0",
+              t.peak > 0.0 ? r.steps[t.peakStep].line : 0, t.time);
   if (result.crossChecked) {
     const CrossCheck& c = result.cross;
     const std::string other = stockModelName(job.otherModel());

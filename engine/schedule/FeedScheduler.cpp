@@ -194,6 +194,8 @@ const char* bindingName(Binding b) {
       return "air";
     case Binding::Plunge:
       return "plunge";
+    case Binding::NoTarget:
+      return "no_target";
     case Binding::Fixed:
       return "fixed";
   }
@@ -228,31 +230,45 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
                        const ScheduleOptions& o) {
   const auto& st = sim.steps;
   Schedule out;
-  // Target: given, or the median MRR of the steady straight steps.
+  // Target per tool: given, or the median MRR of the tool's steady straight steps.
   out.targetMrr = o.targetMrr;
-  // The load the schedule holds: the measured MRR, or the analytic one.
   auto load = [&](const StepRecord& r) {
     const double m = o.analytic ? r.mrrExact : r.mrr;
     return std::isfinite(m) ? m : 0.0;
   };
-  if (!(out.targetMrr > 0.0)) {
-    std::vector<double> steady;
-    for (std::size_t i = 1; i + 1 < st.size(); ++i) {
-      const StepRecord &a = st[i - 1], &r = st[i], &b = st[i + 1];
-      if (r.side != PathSide::Straight || !isFeedStep(r) || load(r) <= 0.0 || a.move != r.move ||
-          b.move != r.move)
-        continue;
-      if (std::abs(load(a) / load(r) - 1.0) < 0.02 && std::abs(load(b) / load(r) - 1.0) < 0.02)
-        steady.push_back(load(r));
-    }
-    if (steady.empty())
-      throw ParameterError(
-          "--target-mrr auto needs steady straight cutting steps; this program has none: give a "
-          "target");
-    std::nth_element(steady.begin(), steady.begin() + static_cast<long>(steady.size() / 2),
-                     steady.end());
-    out.targetMrr = steady[steady.size() / 2];
+  std::map<int, std::vector<double>> steady;
+  for (const StepRecord& r : st)
+    if (isFeedStep(r)) steady[r.tool];
+  for (std::size_t i = 1; i + 1 < st.size(); ++i) {
+    const StepRecord &a = st[i - 1], &r = st[i], &b = st[i + 1];
+    if (r.side != PathSide::Straight || !isFeedStep(r) || load(r) <= 0.0 || a.move != r.move ||
+        b.move != r.move)
+      continue;
+    if (std::abs(load(a) / load(r) - 1.0) < 0.02 && std::abs(load(b) / load(r) - 1.0) < 0.02)
+      steady[r.tool].push_back(load(r));
   }
+  for (auto& [tool, values] : steady) {
+    double& target = out.targets[tool];
+    const auto given = o.targetByTool.find(tool);
+    target = given != o.targetByTool.end() ? given->second : o.targetMrr;
+    if (target > 0.0) continue;
+    if (values.empty()) {
+      if (steady.size() == 1)
+        throw ParameterError(
+            "--target-mrr auto needs steady straight cutting steps; this program has none: give "
+            "a target");
+      continue;  // this tool keeps its programmed feeds (NoTarget)
+    }
+    std::nth_element(values.begin(), values.begin() + static_cast<long>(values.size() / 2),
+                     values.end());
+    target = values[values.size() / 2];
+  }
+  for (const auto& [tool, target] : out.targets)
+    if (target > 0.0 && !(out.targetMrr > 0.0)) out.targetMrr = target;
+  if (!(out.targetMrr > 0.0))
+    throw ParameterError(
+        "--target-mrr auto needs steady straight cutting steps; this program has none: give a "
+        "target");
   double programmedMax = 0.0;
   for (const StepRecord& s : st)
     programmedMax = std::max(programmedMax, s.feed);
@@ -277,13 +293,19 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
       out.binding[i] = Binding::Fixed;
       continue;
     }
+    const double target = out.targets[s.tool];
+    if (!(target > 0.0)) {
+      out.wanted[i] = std::clamp(s.feed, fMin, fMax);
+      out.binding[i] = Binding::NoTarget;
+      continue;
+    }
     const double mrr = load(s);
-    if (mrr < kAirShare * out.targetMrr) {
+    if (mrr < kAirShare * target) {
       out.wanted[i] = std::clamp(o.airFeed > 0.0 ? o.airFeed : s.feed, fMin, fMax);
       out.binding[i] = Binding::Air;
       continue;
     }
-    double f = s.feed * out.targetMrr / mrr;
+    double f = s.feed * target / mrr;
     // Plunges (no horizontal motion) load the cutter's end, not its flank: never faster
     // than programmed.
     const Move& m = path.moves[s.move];

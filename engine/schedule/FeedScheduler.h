@@ -13,6 +13,7 @@
 #include "engine/gcode/Toolpath.h"
 #include "engine/sim/Simulation.h"
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -20,8 +21,11 @@ namespace engage {
 
 /// Settings of one schedule. Feeds mm/min, MRR mm^3/min, acceleration mm/s^2, lengths mm.
 struct ScheduleOptions {
-  /// Target MRR; 0 means "auto": the median measured MRR of the steady straight steps.
+  /// Target MRR; 0 means "auto": the median measured MRR of the tool's steady straight steps.
   double targetMrr = 0.0;
+  /// Per tool number, a target that replaces targetMrr for that tool's steps (e.g. from a
+  /// force limit and the tool's own diameter).
+  std::map<int, double> targetByTool;
   double feedMin = 0.0;       ///< lowest feed the scheduler may command
   double feedMax = 0.0;       ///< highest (0: 2 x the highest programmed feed)
   double airFeed = 0.0;       ///< feed of steps that cut nothing (0: the programmed feed)
@@ -46,17 +50,21 @@ double mrrForForce(double force, double specificEnergy, double diameter, double 
 
 /// What keeps a step's feed from the one that meets the target. Fixed: spindle-synchronised
 /// or probing moves, whose feed the controller sets (Move::fixedFeed()).
-enum class Binding { None, FeedMin, FeedMax, Acceleration, Air, Plunge, Fixed };
+/// NoTarget: a tool of a multi-tool program with no steady straight steps to take an auto
+/// target from (a drill): its steps keep their programmed feeds.
+enum class Binding { None, FeedMin, FeedMax, Acceleration, Air, Plunge, Fixed, NoTarget };
 
 /// The result: per-step feeds and the plan for the writer.
 struct Schedule {
-  double targetMrr = 0.0;
-  std::vector<double> wanted;    ///< per step: the feed that meets the target (clamped)
-  std::vector<double> feed;      ///< per step: the scheduled (commanded) feed
-  std::vector<Binding> binding;  ///< per step: what keeps it from `wanted`
-  FeedPlan plan;                 ///< per move: the pieces for GcodeWriter
-  double timeBefore = 0.0;       ///< feed-move time with the programmed feeds, s
-  double timeAfter = 0.0;        ///< with the scheduled feeds, s
+  double targetMrr =
+      0.0;  ///< the target of the first tool that has one (one-tool runs: the target)
+  std::map<int, double> targets;  ///< per tool number that cuts: its target (0: none, NoTarget)
+  std::vector<double> wanted;     ///< per step: the feed that meets the target (clamped)
+  std::vector<double> feed;       ///< per step: the scheduled (commanded) feed
+  std::vector<Binding> binding;   ///< per step: what keeps it from `wanted`
+  FeedPlan plan;                  ///< per move: the pieces for GcodeWriter
+  double timeBefore = 0.0;        ///< feed-move time with the programmed feeds, s
+  double timeAfter = 0.0;         ///< with the scheduled feeds, s
   double rapidTime = 0.0;  ///< rapids at ScheduleOptions::rapidFeed (the same before and after), s
   double maxAcceleration = 0.0;  ///< largest |Eq 24 acceleration| between scheduled steps, mm/s^2
   std::size_t fWords = 0;        ///< feed pieces in the plan

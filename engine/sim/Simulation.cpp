@@ -81,6 +81,7 @@ StepRecord plannedRecord(const Planned& p, const Move& m, const StepPath& sp, do
   r.move = p.move;
   r.line = m.line;
   r.kind = m.kind;
+  r.tool = m.tool;
   r.length = p.length;
   arc += r.length;
   r.arcLength = arc;
@@ -135,6 +136,20 @@ void finish(Agreement& a) {
 
 }  // namespace
 
+const AptCutter& CutterSet::of(int tool) const {
+  const auto it = byTool.find(tool);
+  if (it != byTool.end()) return it->second;
+  if (fallback) return *fallback;
+  throw ParameterError("no cutter for tool T" + std::to_string(tool));
+}
+
+double CutterSet::smallestRadius() const {
+  double r = fallback ? fallback->radius() : std::numeric_limits<double>::infinity();
+  for (const auto& [tool, cutter] : byTool)
+    r = std::min(r, cutter.radius());
+  return r;
+}
+
 void checkStepCount(const Toolpath& path, double L, std::size_t maxSteps) {
   double steps = 0.0, longest = 0.0;
   const Move* longestMove = nullptr;
@@ -157,7 +172,16 @@ void checkStepCount(const Toolpath& path, double L, std::size_t maxSteps) {
 
 SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& stock,
                           const SimulationOptions& options) {
+  CutterSet one;
+  one.fallback = cutter;
+  return simulate(path, one, stock, options);
+}
+
+SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock& stock,
+                          const SimulationOptions& options) {
   refuseOtherAxes(path);
+  for (const Move& m : path.moves)
+    (void)cutters.of(m.tool);  // every move has its cutter before anything is cut
   const double h = stock.resolution();
   const double L = options.stepLength > 0.0 ? options.stepLength : 2.5 * h;
   SimulationResult out;
@@ -174,6 +198,7 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& 
     const Move& m = path.moves[p.move];
     const StepPath sp = stepPath(m, p.t0, p.t1);
     StepRecord r = plannedRecord(p, m, sp, arc);
+    const AptCutter& cutter = cutters.of(m.tool);
     const auto stepStart = std::chrono::steady_clock::now();
     const Removal rem = stock.remove(Sweep(cutter, sp, h), static_cast<int>(si), r.dt);
     if (options.timeSteps)
@@ -252,11 +277,20 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& 
 
 SimulationResult analyticSteps(const Toolpath& path, const AptCutter& cutter,
                                const SimulationOptions& options, bool stockOnRight) {
+  CutterSet one;
+  one.fallback = cutter;
+  return analyticSteps(path, one, options, stockOnRight);
+}
+
+SimulationResult analyticSteps(const Toolpath& path, const CutterSet& cutters,
+                               const SimulationOptions& options, bool stockOnRight) {
   refuseOtherAxes(path);
   if (!options.stepover || !options.depth)
     throw ParameterError("the analytic model without a stock needs --stepover and --depth");
-  const double L = options.stepLength > 0.0 ? options.stepLength : 2.0 * cutter.radius() / 10.0;
-  const double d = std::min(*options.depth, cutter.height());
+  for (const Move& m : path.moves)
+    (void)cutters.of(m.tool);
+  const double L =
+      options.stepLength > 0.0 ? options.stepLength : 2.0 * cutters.smallestRadius() / 10.0;
   SimulationResult out;
   out.volumeBefore = out.volumeAfter = kNaN;
   double arc = 0.0;
@@ -264,6 +298,8 @@ SimulationResult analyticSteps(const Toolpath& path, const AptCutter& cutter,
     const Move& m = path.moves[p.move];
     const StepPath sp = stepPath(m, p.t0, p.t1);
     StepRecord r = plannedRecord(p, m, sp, arc);
+    const AptCutter& cutter = cutters.of(m.tool);
+    const double d = std::min(*options.depth, cutter.height());
     r.removed = r.mrr = r.width = r.depth = r.engagementRad = kNaN;
     r.curvature = curvatureOf(m);
     out.cuttingTime += r.dt;

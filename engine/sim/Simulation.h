@@ -10,6 +10,7 @@
 #include "stock/Stock.h"
 
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -33,11 +34,23 @@ struct SimulationOptions {
   bool timeSteps = false;
 };
 
+/// The cutters of a run: the cutter of each tool number the moves name (Move::tool), and the
+/// one for numbers not listed (the single cutter of a one-tool run).
+struct CutterSet {
+  std::map<int, AptCutter> byTool;
+  std::optional<AptCutter> fallback;
+  /// The cutter of tool `tool`. Throws ParameterError when there is none.
+  const AptCutter& of(int tool) const;
+  /// The smallest radius among them, mm.
+  double smallestRadius() const;
+};
+
 /// One step's record. Lengths mm, feeds mm/min, volumes mm^3, rates mm^3/min, times s.
 struct StepRecord {
   std::size_t move = 0;  ///< index of the move in the tool path
   int line = 0;          ///< source line
   MoveKind kind = MoveKind::Line;
+  int tool = 0;            ///< the tool in the spindle (its number; 0 before any change)
   double arcLength = 0.0;  ///< cumulative path length at the step's end
   double length = 0.0;     ///< step length
   Eigen::Vector3d end{0.0, 0.0, 0.0};
@@ -92,7 +105,11 @@ struct SimulationResult {
 /// `maxSteps` steps. Throws ParameterError naming the count and the longest move.
 void checkStepCount(const Toolpath& path, double stepLength, std::size_t maxSteps);
 
-/// Run a tool path through a stock. Throws Error from the model or the stock.
+/// Run a tool path through a stock, each step with the cutter of the tool in the spindle.
+/// Throws Error from the model or the stock.
+SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock& stock,
+                          const SimulationOptions& options);
+/// The same with one cutter for every move.
 SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& stock,
                           const SimulationOptions& options);
 
@@ -100,7 +117,9 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& 
 /// the nominal options.stepover and options.depth (both required), with the stock on the
 /// right of the path (climb milling with an M3 spindle) or on its left, which decides
 /// concave or convex; the analytic MRR in both forms per step, the measured fields NaN.
-/// Steps no longer than options.stepLength (0: a tenth of the cutter diameter).
+/// Steps no longer than options.stepLength (0: a tenth of the smallest cutter's diameter).
+SimulationResult analyticSteps(const Toolpath& path, const CutterSet& cutters,
+                               const SimulationOptions& options, bool stockOnRight = true);
 SimulationResult analyticSteps(const Toolpath& path, const AptCutter& cutter,
                                const SimulationOptions& options, bool stockOnRight = true);
 

@@ -147,3 +147,46 @@ TEST_CASE("the report units change the reports only, not how bare numbers are re
   CHECK(job.voxel == Approx(0.25).epsilon(1e-12));
   CHECK(job.cutter.radius() == Approx(3.0).epsilon(1e-12));
 }
+
+TEST_CASE("makeJob gives each tool of a program its cutter, or says which one it lacks",
+          "[run][tools]") {
+  const std::string program = ENGAGE_SOURCE_DIR "/data/gcode/multitool/three_tools.ngc";
+  const std::string tools = ENGAGE_SOURCE_DIR "/data/tools/";
+  using Catch::Matchers::Contains;
+  const JobCommand sim = JobCommand::Simulate;
+  OptionValues one = slotJob(program);
+  // One --tool for a program that changes tools would sweep the wrong cutter silently.
+  CHECK_THAT(errorOf(sim, one),
+             Contains("the program changes tools (T1 from line 8, T2 from line 16, T3 from "
+                      "line 24) and --tool gives one cutter"));
+  OptionValues lib = {
+      {"program", program}, {"tools", tools + "three_tools.tbl"}, {"stock", "box:0,0,-10,60,40,0"}};
+  const Job job = makeJob(sim, lib);
+  REQUIRE(job.cutters.byTool.size() == 4);  // T1-T3 and tool 0, before the first change
+  CHECK(job.cutters.of(2).shape() == CutterShape::Ball);
+  CHECK(job.startTool == 1);
+  // The smallest cutter sets the default voxel, D/20: T2's 4 mm.
+  CHECK(job.voxel == Approx(0.2).margin(1e-12));
+  CHECK(job.tools.at(3).origin == tools + "three_tools.tbl:3");
+
+  test::TempFolder dir("job_tools");
+  lib["tools"] = dir.write("two.tbl", "T1 D6 ;flat\nT2 D4 ;ball\n");
+  CHECK_THAT(errorOf(sim, lib), Contains("three_tools.ngc:24: T3: " + dir.path().string() +
+                                         "/two.tbl: no tool T3 (it has T1, T2)"));
+  lib["tools"] = dir.write("bad.tbl", "T1 D6 ;flat\nT2 D4 ;ball\nT3 D6 ;vbit\n");
+  CHECK_THAT(errorOf(sim, lib), Contains("three_tools.ngc:24: T3: tool T3 (vbit) at"));
+  CHECK_THAT(errorOf(sim, lib), Contains("without angle="));
+  // A program that loads no tool runs with --tool; --tools alone cannot say which.
+  const std::string plain = dir.write("slot.ngc", test::slotProgram());
+  OptionValues noChange = {{"program", plain},
+                           {"tools", tools + "three_tools.tbl"},
+                           {"stock", "box:-10,-10,-10,40,10,0"}};
+  CHECK_THAT(errorOf(sim, noChange), Contains("the program loads no tool"));
+  noChange["tool"] = "flat";
+  CHECK_THAT(errorOf(sim, noChange), Contains("--diameter is required with --tool"));
+  noChange["diameter"] = "6mm";
+  CHECK(errorOf(sim, noChange).empty());
+  OptionValues stray = slotJob(plain);
+  stray.erase("tool");
+  CHECK_THAT(errorOf(sim, stray), Contains("--diameter describes the --tool cutter"));
+}

@@ -54,7 +54,7 @@ TEST_CASE("the pipeline measures a slot as its closed form", "[run]") {
   // The writers: one row per step plus the header, columns in the run's units.
   const std::string csv = stepsTable(r);
   CHECK(lineCount(csv) == r.sim.steps.size() + 1);
-  CHECK(csv.rfind("step,move,line,kind,arc_length_mm,x_mm,", 0) == 0);
+  CHECK(csv.rfind("step,move,line,tool,kind,arc_length_mm,x_mm,", 0) == 0);
   const auto summary = nlohmann::json::parse(summaryJson(r));
   CHECK(summary["removed"].get<double>() == Approx(r.sim.removed).epsilon(1e-12));
   CHECK(summary["peak_mrr"]["line"].get<int>() == r.sim.steps[r.peakStep].line);
@@ -74,7 +74,7 @@ TEST_CASE("the pipeline in inches reports inches", "[run]") {
   // 1 in^3 = 25.4^3 mm^3.
   CHECK(summary["removed"].get<double>() ==
         Approx(r.sim.removed / (25.4 * 25.4 * 25.4)).epsilon(1e-12));
-  CHECK(stepsTable(r).rfind("step,move,line,kind,arc_length_in,", 0) == 0);
+  CHECK(stepsTable(r).rfind("step,move,line,tool,kind,arc_length_in,", 0) == 0);
 }
 
 TEST_CASE("the pipeline cross-checks and schedules", "[run]") {
@@ -183,4 +183,44 @@ TEST_CASE("bounded work: what would run for hours or fill the memory is refused 
   v["taper-angle"] = "89.9deg";
   CHECK_THROWS_WITH(makeJob(JobCommand::Simulate, v),
                     Contains("--taper-angle: expected at most 85 deg"));
+}
+
+TEST_CASE("a program of three tools: each tool's removal and target as its closed form",
+          "[run][tools]") {
+  // data/gcode/multitool/three_tools.ngc, 40 mm features along X, tools from a Fusion library:
+  // - T1 6 mm flat, 2 mm deep slot: (40 x 6 + pi 3^2) x 2 mm^3; steady MRR D d F = 6 2 600.
+  // - T2 4 mm ball, 1 mm deep: the circle segment at 1 mm from a 2 mm centre,
+  //   A = r^2 acos((r-d)/r) - (r-d) sqrt(2rd - d^2) = 4 pi/3 - sqrt 3 mm^2, times 40 mm, plus
+  //   the spherical cap pi d^2 (3r - d) / 3 of the two half-ends; steady MRR A F, F = 800.
+  // - T3 90 deg V-bit, 1 mm deep: a triangle of area 1 mm^2 times 40 mm plus the cone
+  //   pi 1^2 1 / 3 of the two half-ends; steady MRR 1 mm^2 x 500 mm/min.
+  // Dexel stock at the default spacing: measured within 0.03 % of these; 0.1 % allowed.
+  const double segment = 4.0 * kPi / 3.0 - std::sqrt(3.0);
+  const double expected[] = {(40.0 * 6.0 + kPi * 9.0) * 2.0,
+                             segment * 40.0 + kPi * 1.0 * (6.0 - 1.0) / 3.0, 40.0 + kPi / 3.0};
+  const double targets[] = {6.0 * 2.0 * 600.0, segment * 800.0, 500.0};
+  const OptionValues v = {{"program", ENGAGE_SOURCE_DIR "/data/gcode/multitool/three_tools.ngc"},
+                          {"tools", ENGAGE_SOURCE_DIR "/data/tools/three_tools.json"},
+                          {"stock", "box:0,0,-10,60,40,0"},
+                          {"stock-model", "dexel"}};
+  const RunResult r = runJob(makeJob(JobCommand::Schedule, v));
+  const auto summary = nlohmann::json::parse(summaryJson(r));
+  CHECK(summary["tool_library"]["format"] == "fusion360");
+  REQUIRE(summary["tools"].size() == 3);
+  for (int t = 0; t < 3; ++t) {
+    const auto& tool = summary["tools"][static_cast<std::size_t>(t)];
+    CHECK(tool["number"] == t + 1);
+    CHECK(tool["removed"].get<double>() == Approx(expected[t]).epsilon(0.001));
+    // The automatic target is the median steady MRR of each tool: its steady slot MRR. The
+    // dexel steps of T1 alternate 7146 / 7254 mm^3/min (the 0.5 mm step beating the 0.2 mm
+    // dexel spacing, mean 7200): the median is one of the two, 0.75 % off; 1 % allowed.
+    CHECK(tool["target_mrr"].get<double>() == Approx(targets[t]).epsilon(0.01));
+  }
+  CHECK(summary["removed"].get<double>() ==
+        Approx(expected[0] + expected[1] + expected[2]).epsilon(0.001));
+  // No step of one tool was scheduled towards another's target: T3's steady feed stays near
+  // its programmed 500 mm/min (MRR at the target), not 14x faster towards T1's 7200 mm^3/min.
+  for (std::size_t i = 0; i < r.sim.steps.size(); ++i)
+    if (r.sim.steps[i].tool == 3 && r.sim.steps[i].feed == 500.0)
+      CHECK(r.plan.feed[i] <= 500.0 * 1.06);
 }
