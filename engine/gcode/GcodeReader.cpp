@@ -279,6 +279,8 @@ class Interpreter final : public gcode::ParameterSource {
     params_.assign(kParameterCount + 1, 0.0);
     params_[5220] = 1.0;  // G54
     if (!options.toolTable.empty()) readToolTable(options.toolTable);
+    pos_ = options.start;
+    tool_ = preparedTool_ = options.startTool;
   }
 
   Toolpath run(std::unique_ptr<SourceFile> main) {
@@ -913,7 +915,8 @@ class Interpreter final : public gcode::ParameterSource {
       // shift applies only without one. Before the first move the position is an assumption
       // (the program origin), not where a homed spindle is: shifting it by a 40 mm tool
       // length would start the program 40 mm inside the stock and sweep a phantom plunge.
-      if (!w.hasM(60) && !out_.moves.empty()) pos_.z() -= toolLength_ - previousLength;
+      if (!w.hasM(60) && (options_.startKnown || !out_.moves.empty()))
+        pos_.z() -= toolLength_ - previousLength;
     }
     if (const auto g = w.gIn(12)) {
       static const std::map<int, int> systems{{540, 1}, {550, 2}, {560, 3}, {570, 4}, {580, 5},
@@ -1861,6 +1864,41 @@ class Interpreter final : public gcode::ParameterSource {
 
 Toolpath readProgram(const std::string& path, const ReaderOptions& options) {
   return readProgramText(readFile(path), path, options);
+}
+
+Toolpath readPrograms(const std::vector<std::string>& paths, const ReaderOptions& options) {
+  Toolpath all;
+  ReaderOptions o = options;
+  for (const std::string& path : paths) {
+    Toolpath one = readProgram(path, o);
+    const int files = static_cast<int>(all.files.size());
+    const int blocks = static_cast<int>(all.blocks.size());
+    if (all.moves.size() + one.moves.size() > options.maxMoves)
+      throw GcodeError(path, 1, 1,
+                       "expected at most " + std::to_string(options.maxMoves) +
+                           " moves in the programs together, found more");
+    for (Move& m : one.moves) {
+      m.file += files;
+      m.block += blocks;
+      all.moves.push_back(std::move(m));
+    }
+    for (SourceBlock& b : one.blocks) {
+      b.file += files;
+      all.blocks.push_back(std::move(b));
+    }
+    all.files.insert(all.files.end(), one.files.begin(), one.files.end());
+    all.inch = one.inch;
+    if (all.latheLine == 0 && one.latheLine != 0) {
+      all.latheLine = one.latheLine;
+      all.lathe = one.lathe;
+    }
+    if (!all.moves.empty()) {
+      o.start = all.moves.back().end;
+      o.startTool = all.moves.back().tool;
+      o.startKnown = true;
+    }
+  }
+  return all;
 }
 
 Toolpath readProgramText(const std::string& text, const std::string& name,

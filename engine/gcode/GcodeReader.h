@@ -49,11 +49,23 @@ struct ReaderOptions {
   /// beyond it.
   /// 10 million moves hold about 1.8 GB; the option --max-moves raises it.
   std::size_t maxMoves = 10'000'000;
+  /// Where the tool tip starts (machine coordinates, mm) and the tool in the spindle. By
+  /// default an assumption, the program origin with no tool; `startKnown` says it is where an
+  /// earlier program left the machine (the next file of a CAMotics project), so that a G43
+  /// before the first move shifts it as on the machine.
+  Eigen::Vector3d start{0.0, 0.0, 0.0};
+  int startTool = 0;
+  bool startKnown = false;
 };
 
 /// Read and interpret a program file. Throws GcodeError ("file:line:col: expected ..., found
 /// ...") for anything it cannot interpret, Error when the file cannot be read.
 Toolpath readProgram(const std::string& path, const ReaderOptions& options = {});
+
+/// Read several programs run one after the other on one machine (a CAMotics project's files):
+/// each starts where the last left the tool, with the tool it left in the spindle; the moves,
+/// files and blocks of all in one Toolpath.
+Toolpath readPrograms(const std::vector<std::string>& paths, const ReaderOptions& options = {});
 
 /// Interpret program text; `name` is used in messages and as Toolpath::files[0].
 Toolpath readProgramText(const std::string& text, const std::string& name,

@@ -1,5 +1,7 @@
 #include "engine/run/Job.h"
 
+#include "engine/tools/CamoticsProject.h"
+
 #include "cutters/Error.h"
 #include "engine/gcode/GcodeReader.h"
 
@@ -126,31 +128,39 @@ ScheduleOptions scheduleOptions(const OptionValues& values, UnitSystem sys, cons
   return s;
 }
 
-/// The tools a program loads, in order, each with the first line that runs with it.
-std::vector<std::pair<int, int>> toolChanges(const Toolpath& path) {
-  std::vector<std::pair<int, int>> changes;
+/// A tool the program loads, with its first move's file (index into Toolpath::files) and line.
+struct ToolChange {
+  int tool = 0, file = 0, line = 0;
+};
+
+/// The tools a program loads, in order.
+std::vector<ToolChange> toolChanges(const Toolpath& path) {
+  std::vector<ToolChange> changes;
   int current = 0;
   for (const Move& m : path.moves)
     if (m.tool != current) {
       current = m.tool;
-      if (current != 0) changes.emplace_back(current, m.line);
+      if (current != 0) changes.push_back({current, m.file, m.line});
     }
   return changes;
 }
 
 /// The cutters of the job's moves: one --tool for all, or the library's per T number.
+/// `defaultTool`: the tool taken for moves before any change when --tool is not given (a
+/// CAMotics project: 1, as CAMotics selects it); 0: the program's first tool.
 void chooseCutters(Job& job, const std::optional<ToolLibrary>& lib,
-                   const std::optional<AptCutter>& single) {
+                   const std::optional<AptCutter>& single, int defaultTool) {
   const auto changes = toolChanges(job.path);
   if (!lib) {
     if (!single) throw ParameterError("--tool is required (or --tools FILE, a tool library)");
     std::vector<int> numbers;
     std::string list;
-    for (const auto& [tool, line] : changes)
-      if (std::find(numbers.begin(), numbers.end(), tool) == numbers.end()) {
-        numbers.push_back(tool);
-        list += (list.empty() ? "" : ", ") +
-                ("T" + std::to_string(tool) + " from line " + std::to_string(line));
+    for (const ToolChange& c : changes)
+      if (std::find(numbers.begin(), numbers.end(), c.tool) == numbers.end()) {
+        numbers.push_back(c.tool);
+        list += (list.empty() ? "" : ", ") + ("T" + std::to_string(c.tool) + " from ") +
+                (c.file == 0 ? "line " : job.path.files[static_cast<std::size_t>(c.file)] + ":") +
+                std::to_string(c.line);
       }
     if (numbers.size() > 1)
       throw ParameterError(job.program + ": the program changes tools (" + list +
@@ -161,26 +171,32 @@ void chooseCutters(Job& job, const std::optional<ToolLibrary>& lib,
     return;
   }
   job.toolsFormat = lib->format;
-  if (changes.empty() && !single)
+  if (changes.empty() && !single && defaultTool == 0)
     throw ParameterError(job.program +
                          ": the program loads no tool (no T.. M6 or M61 Q..): give --tool for "
                          "the tool in the spindle");
-  for (const auto& [tool, line] : changes) {
-    if (job.tools.count(tool)) continue;
+  for (const ToolChange& c : changes) {
+    if (job.tools.count(c.tool)) continue;
     try {
-      const ToolEntry& e = lib->require(tool);
-      job.tools.emplace(tool, e);
-      job.cutters.byTool.emplace(tool, *e.cutter);
+      const ToolEntry& e = lib->require(c.tool);
+      job.tools.emplace(c.tool, e);
+      job.cutters.byTool.emplace(c.tool, *e.cutter);
     } catch (const ParameterError& err) {
-      throw ParameterError(job.program + ":" + std::to_string(line) + ": T" + std::to_string(tool) +
-                           ": " + err.what());
+      throw ParameterError(job.path.files[static_cast<std::size_t>(c.file)] + ":" +
+                           std::to_string(c.line) + ": T" + std::to_string(c.tool) + ": " +
+                           err.what());
     }
   }
   // Moves before the first change run with --tool, else with the program's first tool.
   if (single) {
     job.cutters.byTool.emplace(0, *single);
   } else {
-    job.startTool = changes.front().first;
+    job.startTool = defaultTool != 0 ? defaultTool : changes.front().tool;
+    if (!job.tools.count(job.startTool)) {
+      const ToolEntry& e = lib->require(job.startTool);
+      job.tools.emplace(job.startTool, e);
+      job.cutters.byTool.emplace(job.startTool, *e.cutter);
+    }
     job.cutters.byTool.emplace(0, job.cutters.byTool.at(job.startTool));
   }
   job.cutter = job.cutters.byTool.begin()->second;
@@ -217,7 +233,18 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   ro.toolTableInch = text("tool-table-units") == "in";
   std::optional<ToolLibrary> library;
   job.toolsFile = text("tools");
-  if (!job.toolsFile.empty()) {
+  // A CAMotics project: its programs, its tool table (unless --tools), its workpiece (unless
+  // --stock).
+  std::optional<CamoticsProject> project;
+  if (isCamoticsProject(job.program)) {
+    project = readCamoticsProject(job.program);
+    job.projectFiles = project->files;
+    if (job.toolsFile.empty()) {
+      library = project->tools;
+      job.toolsFile = job.program;
+    }
+  }
+  if (!job.toolsFile.empty() && !library) {
     ToolLibraryOptions lo;
     lo.linuxcncInch = ro.toolTableInch;
     library = readToolLibrary(job.toolsFile, lo);
@@ -229,7 +256,11 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   if (maxMoves < 1) throw ParameterError("--max-moves must be positive");
   if (maxSteps < 1) throw ParameterError("--max-steps must be positive");
   ro.maxMoves = static_cast<std::size_t>(maxMoves);
-  job.path = readProgram(job.program, ro);
+  job.path = project ? readPrograms(project->files, ro) : readProgram(job.program, ro);
+  if (project && project->files.size() > 1 && command == JobCommand::Schedule)
+    throw ParameterError(job.program + ": schedule re-feeds one program and this project runs " +
+                         std::to_string(project->files.size()) +
+                         "; schedule each program (with --stock from the previous one's run)");
   if (job.path.latheLine != 0)
     throw ParameterError(job.program + ":" + std::to_string(job.path.latheLine) +
                          ": a lathe program (" + job.path.lathe +
@@ -254,7 +285,7 @@ Job makeJob(JobCommand command, const OptionValues& values) {
         throw ParameterError("--" + std::string(name) +
                              " describes the --tool cutter; give --tool");
   }
-  chooseCutters(job, library, single);
+  chooseCutters(job, library, single, project ? 1 : 0);
   const std::string voxel = text("voxel");
   job.voxel = voxel.empty() ? 2.0 * job.cutter.radius() / 20.0
                             : parseQuantity(voxel, Dimension::Length, sys, "--voxel").value;
@@ -278,7 +309,19 @@ Job makeJob(JobCommand command, const OptionValues& values) {
       plainNumber(tolerance, "--cross-check-tolerance: expected a fraction in (0, 1)");
   // Without a stock (schedule --model analytic only) the steps carry the analytic model
   // alone, as in the paper.
-  const std::string stock = text("stock");
+  std::string stock = text("stock");
+  if (stock.empty() && project) {
+    // The project's workpiece, in mm whatever the program's units.
+    const Box3 b = project->automatic
+                       ? camoticsAutomaticWorkpiece(
+                             job.path, [&](int t) -> const AptCutter& { return job.cutters.of(t); },
+                             project->marginPercent)
+                       : project->bounds;
+    char box[256];
+    std::snprintf(box, sizeof box, "box:%.9gmm,%.9gmm,%.9gmm,%.9gmm,%.9gmm,%.9gmm", b.min.x(),
+                  b.min.y(), b.min.z(), b.max.x(), b.max.y(), b.max.z());
+    stock = box;
+  }
   if (stock.empty() && !analytic)
     throw ParameterError("--stock is required (only schedule --model analytic runs without one)");
   if (!stock.empty() && !job.materialSide.empty())
@@ -298,10 +341,10 @@ Job makeJob(JobCommand command, const OptionValues& values) {
     namespace fs = std::filesystem;
     std::error_code e1, e2;
     const fs::path refed =
-        fs::weakly_canonical(fs::path(job.out) / fs::path(job.program).filename(), e1);
-    if (!e1 && refed == fs::weakly_canonical(job.program, e2) && !e2)
-      throw ParameterError("--out: the re-fed program would replace the program '" + job.program +
-                           "' itself; give another --out folder");
+        fs::weakly_canonical(fs::path(job.out) / fs::path(job.mainProgram()).filename(), e1);
+    if (!e1 && refed == fs::weakly_canonical(job.mainProgram(), e2) && !e2)
+      throw ParameterError("--out: the re-fed program would replace the program '" +
+                           job.mainProgram() + "' itself; give another --out folder");
   }
   job.quiet = text("quiet") == "true";
   job.progressLabel = commandName(command);

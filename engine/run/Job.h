@@ -38,8 +38,10 @@ struct StockSpec {
 /// A job, checked: everything in it is valid.
 struct Job {
   JobCommand command = JobCommand::Simulate;
-  std::string program;   ///< the program's path, as given
-  Toolpath path;         ///< the program, read
+  std::string program;  ///< the program's path, as given (or a CAMotics project's)
+  Toolpath path;        ///< the program, read
+  /// A CAMotics project's programs, run one after the other; empty for a program.
+  std::vector<std::string> projectFiles;
   std::string toolText;  ///< the --tool value, as typed (summary.json)
   /// The single cutter (--tool), or with --tools the program's tool of the smallest radius
   /// (the default voxel and step follow it).
@@ -71,6 +73,9 @@ struct Job {
   std::string progressLabel = "simulate";
 
   bool scheduling() const { return command == JobCommand::Schedule; }
+  /// The G-code file the re-fed program rewrites: the program, or a CAMotics project's (one)
+  /// program.
+  const std::string& mainProgram() const { return path.files.empty() ? program : path.files[0]; }
   /// The step length L the simulation uses, mm: --step, else simulate()'s default (2.5 voxels)
   /// with a stock, analyticSteps()'s (D/10) without one.
   double stepLength() const {

@@ -59,6 +59,10 @@ std::string contentHash(const std::string& path) {
   return hex;
 }
 
+/// The options that name files: relative to the manifest, and their content part of the job
+/// (a FreeCAD .fctl's bits are not: an edited bit alone does not re-run its jobs).
+constexpr const char* kFileKeys[] = {"program", "stock", "tool-table", "tools"};
+
 /// One job of the manifest, checked and with its files resolved against `base`.
 ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs::path& base,
                     const std::string& where, std::map<std::string, std::string>& hashes) {
@@ -80,9 +84,8 @@ ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs
     if (std::string(key) == "stock" && v.rfind("box:", 0) == 0) return;
     if (fs::path(v).is_relative()) spec[key] = (base / v).lexically_normal().string();
   };
-  resolve("program");
-  resolve("stock");
-  resolve("tool-table");
+  for (const char* key : kFileKeys)
+    resolve(key);
   for (const auto& [key, value] : spec.items()) {
     if (key == "name" || key == "command") continue;
     if (key == "program" || checkKey(key, value, job.command, j, where))
@@ -97,7 +100,7 @@ ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs
   // The job is its options and the content of its files: an edited program, stock mesh or
   // tool table runs again, an unchanged one is not run twice.
   json content = json::object();
-  for (const char* key : {"program", "stock", "tool-table"}) {
+  for (const char* key : kFileKeys) {
     if (!job.values.count(key) ||
         (std::string(key) == "stock" && job.values.at(key).rfind("box:", 0) == 0))
       continue;

@@ -104,7 +104,7 @@ RunResult executeRun(PreparedRun run, const ProgressFunction& progress) {
   }
   if (job.scheduling()) {
     r.plan = scheduleFeeds(job.path, r.sim, job.schedule);
-    r.refed = writeProgram(readFile(job.program), job.path, r.plan.plan);
+    r.refed = writeProgram(readFile(job.mainProgram()), job.path, r.plan.plan);
   }
   for (std::size_t i = 0; i < r.sim.steps.size(); ++i)
     if (r.sim.steps[i].mrr > r.sim.steps[r.peakStep].mrr) r.peakStep = i;

@@ -5,7 +5,7 @@
 namespace engage {
 
 std::filesystem::path refedProgramPath(const RunResult& result, const std::filesystem::path& dir) {
-  return dir / std::filesystem::path(result.job.program).filename();
+  return dir / std::filesystem::path(result.job.mainProgram()).filename();
 }
 
 void writeRefedProgram(const RunResult& result, const std::filesystem::path& dir) {

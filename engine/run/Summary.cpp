@@ -141,11 +141,14 @@ std::map<int, ToolTotals> toolTotals(const RunResult& result) {
   return totals;
 }
 
-/// The tool's name: the library's, else --tool's.
+/// The tool's name: the library's (else its kind and diameter), else --tool's.
 std::string toolName(const Job& job, int tool) {
   const int number = tool == 0 && job.startTool != 0 ? job.startTool : tool;
   const auto entry = job.tools.find(number);
-  return entry != job.tools.end() ? entry->second.name : job.toolText;
+  if (entry == job.tools.end()) return job.toolText;
+  const ToolEntry& e = entry->second;
+  if (!e.name.empty()) return e.name;
+  return e.kind + " " + formatQuantity(2.0 * e.cutter->maxRadius(), Dimension::Length, job.units);
 }
 
 /// Per tool the program ran with: its cutter, what it removed, its peak MRR, its time.
@@ -192,6 +195,7 @@ std::string summaryJson(const RunResult& result) {
   const std::size_t peak = result.peakStep;
   ordered_json j;
   j["program"] = job.program;
+  if (!job.projectFiles.empty()) j["project_programs"] = job.projectFiles;
   j["units"] = std::string(systemName(sys));
   j["tool"] = job.toolText;
   if (!job.toolsFile.empty())
@@ -294,7 +298,9 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
       w.push_back("moves before the program's first tool change cut " +
                   formatQuantity(before, Dimension::Volume, job.units) + " (from line " +
                   std::to_string(line) + ") with T" + std::to_string(job.startTool) +
-                  ", its first tool: give --tool for the tool in the spindle at the start");
+                  (job.projectFiles.empty() ? ", its first tool"
+                                            : ", the tool CAMotics selects when none is") +
+                  ": give --tool for the tool in the spindle at the start");
   }
   if (written.openEdges > 0)
     w.push_back("stock.stl has " + std::to_string(written.openEdges) + " open edges");

@@ -57,3 +57,18 @@ TEST_CASE("a manifest's jobs are the same however its path is typed", "[run]") {
   CHECK(absolute[0].values.at("program") ==
         std::filesystem::weakly_canonical(dir.path() / "sub" / "p.ngc").string());
 }
+
+TEST_CASE("a manifest's tool library is relative to it and part of its jobs", "[run][tools]") {
+  test::TempFolder dir("manifest_tools");
+  std::filesystem::create_directories(dir.path() / "sub");
+  const std::string m = dir.write("sub/m.json", R"({"jobs": [{"program": "p.ngc",
+      "tools": "shop.tbl", "stock": "box:0,0,-10,60,40,0"}]})");
+  dir.write("sub/shop.tbl", "T1 D6 ;flat\n");
+  const auto before = readManifest(m);
+  REQUIRE(before.size() == 1);
+  CHECK(std::filesystem::path(before[0].values.at("tools")) ==
+        (dir.path() / "sub" / "shop.tbl").lexically_normal());
+  // An edited library makes another job (a batch runs it again).
+  dir.write("sub/shop.tbl", "T1 D8 ;flat\n");
+  CHECK(readManifest(m)[0].specJson != before[0].specJson);
+}
