@@ -364,7 +364,10 @@ void readFreecadLibrary(const json& doc, ToolLibrary& lib) {
 // ------------------------------------------------------------------------------ CAMotics
 
 void readCamotics(const json& tools, ToolLibrary& lib) {
-  for (const auto& [key, t] : tools.items()) {
+  for (const auto& item : tools.items()) {
+    // Not a structured binding: C++17 lambdas (clang) cannot capture one.
+    const std::string key = item.key();
+    const json& t = item.value();
     ToolEntry e;
     e.origin = lib.path + ": tools." + key;
     try {
