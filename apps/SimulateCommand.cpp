@@ -13,7 +13,8 @@ namespace {
 int runSimulate(JobCommand command, const OptionValues& values) {
   const CompletedRun run = runIntoFolder(makeJob(command, values));
   std::fputs(runReport(run.result, run.written).c_str(), stdout);
-  return 0;
+  // 5: the run is complete and written, but a rapid, a shank or a holder met material.
+  return run.result.sim.collisions.empty() ? 0 : 5;
 }
 
 void addCommand(CLI::App& app, std::function<int()>& run, JobCommand command, const char* help) {

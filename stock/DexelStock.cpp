@@ -384,6 +384,31 @@ std::size_t DexelStock::memoryBytes() const {
   return bytes;
 }
 
+double DexelStock::materialInside(const Sweep& sweep, double top) const {
+  const Box3 sb = sweep.bounds();
+  const int i0 = std::max(0, static_cast<int>(std::floor((sb.min.x() - x0_) / h_)));
+  const int i1 = std::min(nx_ - 1, static_cast<int>(std::floor((sb.max.x() - x0_) / h_)));
+  const int j0 = std::max(0, static_cast<int>(std::floor((sb.min.y() - y0_) / h_)));
+  const int j1 = std::min(ny_ - 1, static_cast<int>(std::floor((sb.max.y() - y0_) / h_)));
+  const double zTop = std::min(top, sb.max.z());
+  double sum = 0.0;
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      const double x = x0_ + (i + 0.5) * h_, y = y0_ + (j + 0.5) * h_;
+      for (const Interval& piece : rays_[index(i, j)]) {
+        const double a = std::max(piece.z0, sb.min.z()), b = std::min(piece.z1, zTop);
+        // Pieces of the interval about h long, each in or out by its middle.
+        const int n = static_cast<int>(std::ceil((b - a) / h_));
+        for (int k = 0; k < n; ++k) {
+          const double z0 = a + (b - a) * k / n, z1 = a + (b - a) * (k + 1) / n;
+          if (sweep.signedDistance({x, y, 0.5 * (z0 + z1)}) < 0.0)
+            sum += piece.f * weight_[index(i, j)] * (z1 - z0);
+        }
+      }
+    }
+  return sum * h_ * h_;
+}
+
 Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
   const Box3 sb = sweep.bounds();
   const StepPath& path = sweep.path();

@@ -47,6 +47,7 @@ class DexelStock : public Stock {
   double volume() const override;
   Box3 bounds() const override;
   Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) override;
+  double materialInside(const Sweep& sweep, double top) const override;
 
   /// Rays in x and y, their spacing, and the grid's corner (mm).
   int raysX() const { return nx_; }

@@ -37,6 +37,11 @@ class Stock {
   virtual Box3 bounds() const = 0;
   /// Bytes the model holds.
   virtual std::size_t memoryBytes() const = 0;
+  /// The material inside a swept solid below the height `top`, mm^3, without removing it
+  /// (what a shank or a holder meets): the fractions of the voxels, or the pieces of rays a
+  /// resolution long, whose centres lie inside. Accurate to about a layer of cells on the
+  /// contact's surface.
+  virtual double materialInside(const Sweep& sweep, double top) const = 0;
   /// Remove one step's swept solid; `step` and `dtSeconds` label it (for capture grids).
   virtual Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) = 0;
 };

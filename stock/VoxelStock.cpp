@@ -897,6 +897,44 @@ double VoxelStock::volume() const {
   return sum * impl_->h * impl_->h * impl_->h;
 }
 
+double VoxelStock::materialInside(const Sweep& sweep, double top) const {
+  const Impl& s = *impl_;
+  const double h = s.h;
+  Box3 wb = sweep.bounds();
+  wb.max.z() = std::min(wb.max.z(), top);
+  const Coord lo = s.index(wb.min) - Coord(1);
+  const Coord hi = s.index(wb.max) + Coord(1);
+  const double leafHalfDiagonal = 0.5 * std::sqrt(3.0) * kLeafDim * h;
+  auto acc = s.grid->getConstAccessor();
+  auto floorLeaf = [](int v) { return v & ~(kLeafDim - 1); };
+  double sum = 0.0;
+  for (int x = floorLeaf(lo.x()); x <= hi.x(); x += kLeafDim)
+    for (int y = floorLeaf(lo.y()); y <= hi.y(); y += kLeafDim)
+      for (int z = floorLeaf(lo.z()); z <= hi.z(); z += kLeafDim) {
+        const Coord origin(x, y, z);
+        const Leaf* leaf = acc.probeConstLeaf(origin);
+        if (leaf ? leaf->isEmpty() : (!acc.isValueOn(origin) || acc.getValue(origin) <= 0.0f))
+          continue;  // all air
+        const openvdb::Vec3d c = s.world(origin) + openvdb::Vec3d(0.5 * (kLeafDim - 1) * h);
+        if (sweep.signedDistance(Eigen::Vector3d(c.x(), c.y(), c.z())) > leafHalfDiagonal + h)
+          continue;  // out of reach
+        const Coord from = Coord::maxComponent(origin, lo);
+        const Coord to = Coord::minComponent(origin + Coord(kLeafDim - 1), hi);
+        for (int ix = from.x(); ix <= to.x(); ++ix)
+          for (int iy = from.y(); iy <= to.y(); ++iy)
+            for (int iz = from.z(); iz <= to.z(); ++iz) {
+              const Coord ijk(ix, iy, iz);
+              // A leaf's voxel, or a material tile's value.
+              const float f =
+                  leaf ? (leaf->isValueOn(ijk) ? leaf->getValue(ijk) : 0.0f) : acc.getValue(ijk);
+              if (f <= 0.0f || (iz - 0.5) * h > top) continue;
+              if (sweep.signedDistance(Eigen::Vector3d(ix * h, iy * h, iz * h)) < 0.0)
+                sum += static_cast<double>(f);
+            }
+      }
+  return sum * h * h * h;
+}
+
 double VoxelStock::fraction(int i, int j, int k) const {
   return static_cast<double>(impl_->grid->tree().getValue(Coord(i, j, k)));
 }

@@ -76,6 +76,7 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     r["peak_mrr_mm3_min"] = peak;
     r["peak_mrr_line"] = peakLine;
     r["cutting_time_s"] = sim.cuttingTime;
+    r["collisions"] = sim.collisions.size();
     const bool scheduled = out.job.scheduling();
     r["feed_time_before_s"] = scheduled ? ordered_json(out.plan.timeBefore) : ordered_json();
     r["feed_time_after_s"] = scheduled ? ordered_json(out.plan.timeAfter) : ordered_json();
@@ -88,7 +89,7 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     r["error"] = e.what();
     for (const char* key :
          {"moves", "steps", "removed_mm3", "peak_mrr_mm3_min", "peak_mrr_line", "cutting_time_s",
-          "feed_time_before_s", "feed_time_after_s", "saving_relative"})
+          "collisions", "feed_time_before_s", "feed_time_after_s", "saving_relative"})
       r[key] = nullptr;
     r["warnings"] = ordered_json::array();
     // A failed job keeps nothing but its record.

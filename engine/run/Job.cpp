@@ -128,6 +128,37 @@ ScheduleOptions scheduleOptions(const OptionValues& values, UnitSystem sys, cons
   return s;
 }
 
+/// The parts of a library tool above its flutes, checked for collisions: the shank (the
+/// library's diameter, else the cutter's) from the flute length up to the stickout (else the
+/// overall length), and the holder's segments stacked from the stickout up. None when the
+/// library gives no length above the flutes.
+std::vector<ToolPart> toolParts(const ToolEntry& e) {
+  std::vector<ToolPart> parts;
+  const AptCutter& c = *e.cutter;
+  const double h = c.height();
+  const double top = e.stickout > 0.0 ? e.stickout : e.overallLength;
+  if (top > h + 1e-9) {
+    const double d = e.shankDiameter > 0.0 ? e.shankDiameter : 2.0 * c.maxRadius();
+    parts.push_back({"shank", AptCutter::flat(d, top - h), h});
+  }
+  double z = e.stickout;
+  for (std::size_t i = 0; e.stickout > 0.0 && i < e.holder.size(); ++i) {
+    const HolderSegment& s = e.holder[i];
+    if (!(s.height > 0.0)) continue;
+    try {
+      const double beta = std::atan2(0.5 * (s.upperDiameter - s.lowerDiameter), s.height);
+      parts.push_back({"holder",
+                       std::abs(beta) < 1e-12 ? AptCutter::flat(s.lowerDiameter, s.height)
+                                              : AptCutter::taper(s.lowerDiameter, beta, s.height),
+                       z});
+    } catch (const Error& err) {
+      throw ParameterError("holder segment " + std::to_string(i + 1) + ": " + err.what());
+    }
+    z += s.height;
+  }
+  return parts;
+}
+
 /// A tool the program loads, with its first move's file (index into Toolpath::files) and line.
 struct ToolChange {
   int tool = 0, file = 0, line = 0;
@@ -181,6 +212,7 @@ void chooseCutters(Job& job, const std::optional<ToolLibrary>& lib,
       const ToolEntry& e = lib->require(c.tool);
       job.tools.emplace(c.tool, e);
       job.cutters.byTool.emplace(c.tool, *e.cutter);
+      job.cutters.partsByTool[c.tool] = toolParts(e);
     } catch (const ParameterError& err) {
       throw ParameterError(job.path.files[static_cast<std::size_t>(c.file)] + ":" +
                            std::to_string(c.line) + ": T" + std::to_string(c.tool) + ": " +
@@ -196,8 +228,10 @@ void chooseCutters(Job& job, const std::optional<ToolLibrary>& lib,
       const ToolEntry& e = lib->require(job.startTool);
       job.tools.emplace(job.startTool, e);
       job.cutters.byTool.emplace(job.startTool, *e.cutter);
+      job.cutters.partsByTool[job.startTool] = toolParts(e);
     }
     job.cutters.byTool.emplace(0, job.cutters.byTool.at(job.startTool));
+    job.cutters.partsByTool[0] = job.cutters.partsByTool[job.startTool];
   }
   job.cutter = job.cutters.byTool.begin()->second;
   for (const auto& [tool, c] : job.cutters.byTool)

@@ -212,6 +212,22 @@ std::string summaryJson(const RunResult& result) {
   j["removed_vs_stock_change_relative"] =
       r.removed > 0 ? std::abs(r.removed - (r.volumeBefore - r.volumeAfter)) / r.removed : 0.0;
   j["removed_by_rapids"] = toDisplay(r.rapidRemoved, Dimension::Volume, sys);
+  {
+    // What must not cut and met material: rapids, shanks, holders (the first 1000 places).
+    ordered_json list = ordered_json::array();
+    for (std::size_t i = 0; i < r.collisions.size() && i < 1000; ++i) {
+      const Collision& c = r.collisions[i];
+      const Move& m = job.path.moves[c.move];
+      list.push_back({{"file", job.path.files[static_cast<std::size_t>(m.file)]},
+                      {"line", c.line},
+                      {"tool", c.tool},
+                      {"part", c.part},
+                      {"first_step", c.firstStep},
+                      {"last_step", c.lastStep},
+                      {"volume", toDisplay(c.volume, Dimension::Volume, sys)}});
+    }
+    j["collisions"] = {{"count", r.collisions.size()}, {"places", list}};
+  }
   j["cutting_time_s"] = r.cuttingTime;
   j["run_time_s"] = r.seconds;
   j["steps_per_second"] = r.seconds > 0 ? static_cast<double>(r.steps.size()) / r.seconds : 0.0;
@@ -363,6 +379,17 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
   }
   for (const std::string& w : runWarnings(result, written))
     report += "warning: " + w + "\n";
+  // Collisions: the first ten places, the rest in summary.json.
+  for (std::size_t i = 0; i < r.collisions.size() && i < 10; ++i) {
+    const Collision& c = r.collisions[i];
+    const Move& m = job.path.moves[c.move];
+    appendf(report, "collision: %s:%d: T%d %s met %s (steps %zu-%zu)\n",
+            job.path.files[static_cast<std::size_t>(m.file)].c_str(), c.line, c.tool,
+            c.part == "rapid" ? "rapid" : c.part.c_str(), q(c.volume, Dimension::Volume).c_str(),
+            c.firstStep, c.lastStep);
+  }
+  if (r.collisions.size() > 10)
+    appendf(report, "collision: %zu more places in summary.json\n", r.collisions.size() - 10);
   if (job.scheduling())
     appendf(
         report,
@@ -379,7 +406,7 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
   for (const std::string& f : written.plots)
     plotted += "," + f;
   if (written.refedProgram)
-    programName = "," + std::filesystem::path(job.program).filename().string();
+    programName = "," + std::filesystem::path(job.mainProgram()).filename().string();
   appendf(report, "wrote %s/{%ssummary.json%s%s%s}\n", job.out.c_str(),
           written.steps ? "steps.csv," : "",
           written.stockFiles ? ",removed.vdb,stock.vdb,stock.stl" : "", programName.c_str(),

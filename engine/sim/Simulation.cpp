@@ -177,6 +177,24 @@ SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& 
   return simulate(path, one, stock, options);
 }
 
+namespace {
+
+/// Add one step's contact to the collisions, joining the last record when it is the same move
+/// and part: a rapid's removals add up; a shank or holder meets the same material step after
+/// step (it removes nothing), so its record keeps the most it met at once.
+void addCollision(std::vector<Collision>& list, const Collision& c) {
+  // The records of this move (a rapid's own removal and its shank's contact interleave).
+  for (auto it = list.rbegin(); it != list.rend() && it->move == c.move; ++it)
+    if (it->part == c.part && it->lastStep + 1 == c.firstStep) {
+      it->lastStep = c.lastStep;
+      it->volume = c.part == "rapid" ? it->volume + c.volume : std::max(it->volume, c.volume);
+      return;
+    }
+  list.push_back(c);
+}
+
+}  // namespace
+
 SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock& stock,
                           const SimulationOptions& options) {
   refuseOtherAxes(path);
@@ -186,6 +204,16 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   const double L = options.stepLength > 0.0 ? options.stepLength : 2.5 * h;
   SimulationResult out;
   out.volumeBefore = stock.volume();
+  const double stockTop = stock.bounds().max.z();
+  // Each tool's non-cutting parts with their shapes a cell slimmer (see below).
+  std::map<int, std::vector<std::pair<ToolPart, AptCutter>>> slimParts;
+  for (const auto& [tool, parts] : cutters.partsByTool)
+    for (const ToolPart& part : parts) {
+      AptParameters slim = part.shape.parameters();
+      slim.radius = std::max(0.5 * slim.radius, slim.radius - h);
+      slim.cornerCenterRadial = std::max(0.0, slim.radius - slim.cornerRadius);
+      slimParts[tool].emplace_back(part, AptCutter::fromApt(slim, 2, CutterShape::General));
+    }
 
   // Plan the steps first (for progress and for the records).
   const std::vector<Planned> plan = planSteps(path, L, options.maxSteps);
@@ -215,8 +243,29 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
     out.voxelsChanged += r.voxelsChanged;
     // A rapid that removes more than half a voxel hits material (a crash on a machine);
     // below that it is the fraction scheme's rounding along walls it retraces.
-    if (m.kind == MoveKind::Rapid && r.removed > kRapidNoiseVoxels * h * h * h)
+    if (m.kind == MoveKind::Rapid && r.removed > kRapidNoiseVoxels * h * h * h) {
       out.rapidRemoved += r.removed;
+      addCollision(out.collisions, {p.move, m.line, m.tool, "rapid", si, si, r.removed});
+    }
+    // The shank and the holder, after the cutter took its share: what they meet is a crash.
+    // Whether they meet material is asked of the part a cell slimmer: a shank as wide as its
+    // cutter grazes the wall the cutter just cut, whose cells hold fractions up to a cell's
+    // half diagonal inside the cutter's radius; how much they meet, of the part itself.
+    if (const auto parts = slimParts.find(m.tool); parts != slimParts.end())
+      for (const auto& [part, slim] : parts->second) {
+        if (std::min(sp.start.z(), sp.end.z()) + part.zOffset >= stockTop) continue;
+        StepPath raised = sp;
+        const Eigen::Vector3d up(0.0, 0.0, part.zOffset);
+        raised.start += up;
+        raised.end += up;
+        raised.center += up;
+        for (Eigen::Vector3d& q : raised.points)
+          q += up;
+        if (stock.materialInside(Sweep(slim, raised, h), stockTop) <= kRapidNoiseVoxels * h * h * h)
+          continue;
+        const double met = stock.materialInside(Sweep(part.shape, raised, h), stockTop);
+        addCollision(out.collisions, {p.move, m.line, m.tool, part.name, si, si, met});
+      }
     out.cuttingTime += r.dt;
 
     // Side of the curve the stock is on: concave when it lies on the outer side.

@@ -36,9 +36,19 @@ struct SimulationOptions {
 
 /// The cutters of a run: the cutter of each tool number the moves name (Move::tool), and the
 /// one for numbers not listed (the single cutter of a one-tool run).
+/// A part of a tool above its flutes that must never meet material: the shank, a segment of
+/// the holder. Its shape is a cutter profile whose tip sits `zOffset` above the tool's tip.
+struct ToolPart {
+  std::string name;  ///< "shank" or "holder"
+  AptCutter shape;
+  double zOffset = 0.0;  ///< mm
+};
+
 struct CutterSet {
   std::map<int, AptCutter> byTool;
   std::optional<AptCutter> fallback;
+  /// The non-cutting parts of each tool (none when the library does not describe them).
+  std::map<int, std::vector<ToolPart>> partsByTool;
   /// The cutter of tool `tool`. Throws ParameterError when there is none.
   const AptCutter& of(int tool) const;
   /// The smallest radius among them, mm.
@@ -85,8 +95,22 @@ struct Difference {
 };
 
 /// The whole run.
+/// Material met by what must not cut, over consecutive steps of one move: a rapid, or a
+/// tool's shank or holder (ToolPart). Volumes mm^3.
+struct Collision {
+  std::size_t move = 0;
+  int line = 0;
+  int tool = 0;
+  std::string part;  ///< "rapid", "shank", "holder"
+  std::size_t firstStep = 0, lastStep = 0;
+  /// Material met: what a rapid removed over the steps; for a shank or holder, the most
+  /// inside its sweep at one step (sampled at voxel / ray centres: to a layer of voxels).
+  double volume = 0.0;
+};
+
 struct SimulationResult {
   std::vector<StepRecord> steps;
+  std::vector<Collision> collisions;  ///< in step order
   double volumeBefore = 0.0;
   double volumeAfter = 0.0;
   double removed = 0.0;

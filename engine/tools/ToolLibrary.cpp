@@ -63,6 +63,8 @@ struct Shape {
   double tipDiameter = 0.0;  ///< flat tip of a taper or a chamfer mill
   double fluteLength = 0.0;  ///< 0: 3 D
   int flutes = 2;
+  double shankDiameter = 0.0;  ///< LinuxCNC comment's shank=, 0 when not said
+  double stickout = 0.0;       ///< LinuxCNC comment's stickout=, 0 when not said
 };
 
 /// A field of a tool is wrong: the message names the field and its value.
@@ -418,7 +420,9 @@ void readCamotics(const json& tools, ToolLibrary& lib) {
 /// flat / endmill, ball / ballnose, bull, taper, vbit / v-bit / chamfer / engraving, drill;
 /// key=value: r= (corner radius), angle= (included angle of a chamfer or drill, the side to
 /// the axis of a taper), flutes=, loc= or flute-length= (length of cut), tip= (tip diameter of
-/// a taper or a chamfer mill). Lengths take units (r=0.5mm); bare numbers are the table's.
+/// a taper or a chamfer mill), shank= (shank diameter, default D) and stickout= (tip to the
+/// holder: with it the shank is checked for collisions). Lengths take units (r=0.5mm); bare
+/// numbers are the table's. The table's Z is a length offset, not the tool's length: unused.
 Shape linuxcncShape(const std::string& comment, double diameter, UnitSystem sys) {
   Shape s;
   s.kind = "flat";
@@ -446,6 +450,10 @@ Shape linuxcncShape(const std::string& comment, double diameter, UnitSystem sys)
         s.fluteLength = length(v, key + "=");
       else if (key == "tip")
         s.tipDiameter = length(v, "tip=");
+      else if (key == "shank")
+        s.shankDiameter = length(v, "shank=");
+      else if (key == "stickout")
+        s.stickout = length(v, "stickout=");
       else if (key == "shape")
         w = v;
       if (key != "shape") continue;
@@ -512,10 +520,12 @@ void readLinuxcnc(const std::string& textIn, ToolLibrary& lib, const ToolLibrary
     while (!e.name.empty() && std::isspace(static_cast<unsigned char>(e.name.front())))
       e.name.erase(0, 1);
     e.kind = "linuxcnc";
-    e.overallLength = v.count('Z') ? v['Z'] * unit : 0.0;
     finish(e, [&] {
       if (!v.count('D')) fieldError("D", "(the diameter) is missing");
-      return linuxcncShape(comment, v['D'] * unit, sys);
+      const Shape s = linuxcncShape(comment, v['D'] * unit, sys);
+      e.shankDiameter = s.shankDiameter;
+      e.stickout = s.stickout;
+      return s;
     });
     lib.tools.push_back(std::move(e));
   }

@@ -224,3 +224,55 @@ TEST_CASE("a program of three tools: each tool's removal and target as its close
     if (r.sim.steps[i].tool == 3 && r.sim.steps[i].feed == 500.0)
       CHECK(r.plan.feed[i] <= 500.0 * 1.06);
 }
+
+TEST_CASE("rapids, shanks and holders that meet material are collisions, with their lines",
+          "[run][tools]") {
+  // data/gcode/multitool/crashes.ngc with T1 of three_tools.json: flat D6, flutes 18 mm, the
+  // shank (D6) up to 25 mm, then the holder (D22, 10 mm tall) in a box whose top is Z0.
+  const double stadium = kPi * 9.0 + 6.0 * 20.0 / 27.0;  // disc + one step (20 mm / 27 steps)
+  struct Expected {
+    int line;
+    const char* part;
+    double volume, tolerance;
+  };
+  // - line 7: the cutter removes up to Z-2, the shank meets the top 2 mm: per step its disc
+  //   and the step's stadium, 2 mm tall (the most at one step). 3 %: a layer of cells on
+  //   the shank's 2 x (pi 6 + 2 x 0.74) mm^2 of contact.
+  // - line 10: a rapid plunge 1 mm deep, pi 3^2 x 1; line 11: a rapid 10 mm along X at 1 mm,
+  //   its disc already gone: 10 x 6 x 1. 1 %: what the stock models do on a slot's ends.
+  // - line 14: the plunge swept the flutes through its column; the holder's face (D22) meets
+  //   the ring pi (11^2 - 3^2) x 1 mm at the bottom. 6 %: the 1 mm contact is 3.3 cells of
+  //   0.3 mm, and the cell centres below the top take 3.5 of them (1.05 mm, voxels +4.8 %).
+  const Expected expected[] = {{7, "shank", 2.0 * stadium, 0.03},
+                               {10, "rapid", kPi * 9.0, 0.01},
+                               {11, "rapid", 60.0, 0.01},
+                               {14, "holder", kPi * (121.0 - 9.0), 0.06}};
+  for (const char* model : {"voxel", "dexel"}) {
+    const OptionValues v = {{"program", ENGAGE_SOURCE_DIR "/data/gcode/multitool/crashes.ngc"},
+                            {"tools", ENGAGE_SOURCE_DIR "/data/tools/three_tools.json"},
+                            {"stock", "box:0,0,-30,60,40,0"},
+                            {"stock-model", model}};
+    const RunResult r = runJob(makeJob(JobCommand::Simulate, v));
+    INFO(model);
+    for (const Expected& e : expected) {
+      INFO("line " << e.line << " " << e.part);
+      const auto found =
+          std::find_if(r.sim.collisions.begin(), r.sim.collisions.end(),
+                       [&](const Collision& c) { return c.line == e.line && c.part == e.part; });
+      REQUIRE(found != r.sim.collisions.end());
+      CHECK(found->tool == 1);
+      CHECK(found->volume == Approx(e.volume).epsilon(e.tolerance));
+    }
+    // The plunge of line 14 swept its flutes up the whole column: no shank contact there.
+    for (const Collision& c : r.sim.collisions)
+      CHECK_FALSE((c.line == 14 && c.part == "shank"));
+    const auto summary = nlohmann::json::parse(summaryJson(r));
+    CHECK(summary["collisions"]["count"].get<std::size_t>() == r.sim.collisions.size());
+  }
+  // The clean program with the same tool, shank and holder: none.
+  const OptionValues clean = {
+      {"program", ENGAGE_SOURCE_DIR "/data/gcode/multitool/three_tools.ngc"},
+      {"tools", ENGAGE_SOURCE_DIR "/data/tools/three_tools.json"},
+      {"stock", "box:0,0,-10,60,40,0"}};
+  CHECK(runJob(makeJob(JobCommand::Simulate, clean)).sim.collisions.empty());
+}

@@ -65,7 +65,6 @@ TEST_CASE("a LinuxCNC tool table gives each T its cutter from D and the comment"
   CHECK(bull.cutter->shape() == CutterShape::Bull);
   CHECK(bull.cutter->radius() == Approx(5.0).margin(1e-9));
   CHECK(bull.cutter->parameters().cornerRadius == Approx(1.0).margin(1e-9));
-  CHECK(bull.overallLength == Approx(60.0).margin(1e-9));
   CHECK(bull.origin == kTools + "three_tools.tbl:4");
   CHECK(bull.name == "10 mm bull nose bull r=1 flutes=4");
 
@@ -77,7 +76,6 @@ TEST_CASE("a LinuxCNC tool table gives each T its cutter from D and the comment"
     // 0.25 in = 6.35 mm.
     CHECK(cutterOf(lib2, 5).radius() == Approx(3.175).margin(1e-9));
     CHECK(cutterOf(lib2, 5).shape() == CutterShape::Ball);
-    CHECK(lib2.tools[0].overallLength == Approx(25.4).margin(1e-9));
   }
   SECTION("an unreadable word stops the reading at its line") {
     CHECK(errorOf([] { parseToolLibrary("T1 D6\nT2 D4 Zed\n", "shop.tbl"); }) ==
