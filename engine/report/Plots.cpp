@@ -111,12 +111,21 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
     script += bothFormats(name, body, files);
   };
   const std::string x = "\"arc_length_" + L + "\"";
+  // Tool changes on the plots along the path (not on the top view).
+  for (const auto& [at, label] : p.toolChanges) {
+    char mark[256];
+    std::snprintf(mark, sizeof mark,
+                  "set arrow from %.9g, graph 0 to %.9g, graph 1 nohead dt 2 lc rgb 'gray40'\n"
+                  "set label %s at %.9g, graph 0.96 offset 0.4,0 tc rgb 'gray25'\n",
+                  at, at, quoted(label).c_str(), at);
+    script += mark;
+  }
   std::string mrr =
       "set title 'Material removal rate along the path'\nset xlabel 'arc length (" + p.lengthLabel +
       ")'\nset ylabel 'MRR (" + p.rateLabel + ")'\n" + "plot 'steps.csv' using " + x + ":\"mrr_" +
-      Q + "\" with lines lw 1.5 title 'measured (voxels)', " + "'' using " + x + ":\"mrr_exact_" +
-      Q + "\" with lines lw 1 dt 2 title 'analytic, exact', " + "'' using " + x + ":\"mrr_paper_" +
-      Q + "\" with lines lw 1 dt 3 title 'analytic, paper'";
+      Q + "\" with lines lw 1.5 title 'measured (" + p.model + ")', " + "'' using " + x +
+      ":\"mrr_exact_" + Q + "\" with lines lw 1 dt 2 title 'analytic, exact', " + "'' using " + x +
+      ":\"mrr_paper_" + Q + "\" with lines lw 1 dt 3 title 'analytic, paper'";
   if (p.schedule)
     mrr += ", '' using " + x + ":\"mrr_scheduled_" + Q +
            "\" with lines lw 1.5 title 'measured, re-fed'";
@@ -140,6 +149,7 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
     }
     plot("acceleration", acc + "\n");
   }
+  script += "unset arrow\nunset label\n";
   plot("topview", "set title 'Top view, coloured by measured MRR (" + p.rateLabel +
                       ")'\nset size ratio -1\nset xlabel 'x (" + p.lengthLabel +
                       ")'\nset ylabel 'y (" + p.lengthLabel + ")'\nset palette rgb 33,13,10\n" +

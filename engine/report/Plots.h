@@ -6,6 +6,7 @@
 /// and a top view of the path coloured by MRR.
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace engage {
@@ -19,7 +20,11 @@ struct PlotSpec {
   std::string lengthLabel, feedLabel, rateLabel, accelerationLabel;  ///< axis units
   std::string accelerationTag;                                       ///< e.g. "mm_s2"
   bool schedule = false;         ///< steps.csv has the scheduled columns
+  std::string model = "voxels";  ///< the stock model that measured: voxels or dexels
   double accelerationLimit = 0;  ///< in the plot's units; 0: none drawn
+  /// Tool changes: arc length (the plot's units) where each tool starts, and its label ("T2"),
+  /// drawn as dashed vertical lines on the plots along the path.
+  std::vector<std::pair<double, std::string>> toolChanges;
 };
 
 /// Draw the plots; returns the files written (without the folder). Throws Error when gnuplot

@@ -27,7 +27,14 @@ PlotSpec plotSpec(const RunResult& result, const std::filesystem::path& dir) {
   ps.rateLabel = unitLabel(Dimension::VolumeRate, sys);
   ps.accelerationLabel = unitLabel(Dimension::Acceleration, sys);
   ps.schedule = result.job.scheduling();
+  ps.model = result.job.stockModel == StockModel::Dexel ? "dexels" : "voxels";
   ps.accelerationLimit = toDisplay(result.job.schedule.acceleration, Dimension::Acceleration, sys);
+  // Where each tool starts along the path, when the program changes tools.
+  const auto& steps = result.sim.steps;
+  for (std::size_t i = 1; i < steps.size(); ++i)
+    if (steps[i].tool != steps[i - 1].tool)
+      ps.toolChanges.emplace_back(toDisplay(steps[i - 1].arcLength, Dimension::Length, sys),
+                                  "T" + std::to_string(steps[i].tool));
   return ps;
 }
 

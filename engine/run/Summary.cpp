@@ -390,12 +390,19 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
   }
   if (r.collisions.size() > 10)
     appendf(report, "collision: %zu more places in summary.json\n", r.collisions.size() - 10);
+  std::string targets = q(plan.targetMrr, Dimension::VolumeRate);
+  if (plan.targets.size() > 1) {
+    targets.clear();
+    for (const auto& [tool, target] : plan.targets)
+      targets += (targets.empty() ? "T" : ", T") + std::to_string(tool) + " " +
+                 (target > 0.0 ? q(target, Dimension::VolumeRate) : "none (programmed feeds)");
+  }
   if (job.scheduling())
     appendf(
         report,
         "schedule: target %s, feed time %.1f s -> %.1f s (%.1f %% %s), largest acceleration %s, "
         "%zu feed pieces\n",
-        q(plan.targetMrr, Dimension::VolumeRate).c_str(), plan.timeBefore, plan.timeAfter,
+        targets.c_str(), plan.timeBefore, plan.timeAfter,
         plan.timeBefore > 0 ? std::abs(100.0 * (1.0 - plan.timeAfter / plan.timeBefore)) : 0.0,
         plan.timeAfter <= plan.timeBefore ? "saved" : "longer",
         q(plan.maxAcceleration, Dimension::Acceleration).c_str(), plan.fWords);
