@@ -41,8 +41,10 @@ void addToolOptions(CLI::App& cmd, ToolOptions& t, bool required) {
                                                       {"bottom-angle", &t.bottomAngle},
                                                       {"flute-length", &t.fluteLength}};
   for (const OptionInfo& o : jobOptions()) {
-    // analyze studies one cutter: a tool library belongs to the job commands.
-    if (o.group != OptionGroup::Tool || o.name == "tools") continue;
+    // analyze studies one cutter: a tool library, shanks and holders belong to the job commands.
+    if (o.group != OptionGroup::Tool || o.name == "tools" || o.name == "shank-diameter" ||
+        o.name == "stickout" || o.name == "holder")
+      continue;
     if (o.name == "flutes") {
       cmd.add_option("--flutes", t.flutes, o.help)->capture_default_str();
       continue;

@@ -159,6 +159,36 @@ std::vector<ToolPart> toolParts(const ToolEntry& e) {
   return parts;
 }
 
+/// --holder: segments "DxH" (a cylinder) or "D1-D2xH" (a cone frustum from D1 at its bottom),
+/// comma-separated, from the holder's face up; lengths with units or in the program's.
+std::vector<HolderSegment> parseHolder(const std::string& text, UnitSystem sys) {
+  std::vector<HolderSegment> out;
+  std::istringstream in(text);
+  std::string piece;
+  while (std::getline(in, piece, ',')) {
+    const auto x = piece.find('x');
+    if (x == std::string::npos)
+      throw ParameterError(
+          "--holder: expected segments such as 22x10 or 28-40x30 (diameter x "
+          "height), found '" +
+          piece + "'");
+    const std::string diameters = piece.substr(0, x);
+    const auto dash = diameters.find('-', 1);
+    auto length = [&](const std::string& v) {
+      const double l = parseQuantity(v, Dimension::Length, sys, "--holder").value;
+      if (!(l > 0.0)) throw ParameterError("--holder: '" + v + "' must be positive");
+      return l;
+    };
+    HolderSegment s;
+    s.lowerDiameter = length(diameters.substr(0, dash));
+    s.upperDiameter =
+        dash == std::string::npos ? s.lowerDiameter : length(diameters.substr(dash + 1));
+    s.height = length(piece.substr(x + 1));
+    out.push_back(s);
+  }
+  return out;
+}
+
 /// A tool the program loads, with its first move's file (index into Toolpath::files) and line.
 struct ToolChange {
   int tool = 0, file = 0, line = 0;
@@ -320,6 +350,32 @@ Job makeJob(JobCommand command, const OptionValues& values) {
                              " describes the --tool cutter; give --tool");
   }
   chooseCutters(job, library, single, project ? 1 : 0);
+  // --tool's shank and holder, checked for collisions as a library's are.
+  if (single && !text("stickout").empty()) {
+    ToolEntry e;
+    e.cutter = *single;
+    e.stickout = parseQuantity(text("stickout"), Dimension::Length, sys, "--stickout").value;
+    if (!(e.stickout > single->height()))
+      throw ParameterError("--stickout must exceed the flute length (" +
+                           formatQuantity(single->height(), Dimension::Length, sys) + ")");
+    if (!text("shank-diameter").empty())
+      e.shankDiameter =
+          parseQuantity(text("shank-diameter"), Dimension::Length, sys, "--shank-diameter").value;
+    if (!(e.shankDiameter >= 0.0)) throw ParameterError("--shank-diameter must be positive");
+    e.holder = parseHolder(text("holder"), sys);
+    try {
+      job.cutters.fallbackParts = toolParts(e);
+    } catch (const Error& err) {
+      throw ParameterError("--holder: " + std::string(err.what()));
+    }
+  } else if (!text("shank-diameter").empty() || !text("holder").empty()) {
+    throw ParameterError(single ? "--shank-diameter and --holder need --stickout (where the "
+                                  "holder's face is)"
+                                : "--shank-diameter, --stickout and --holder describe --tool; a "
+                                  "library's tools carry their own");
+  } else if (!single && !text("stickout").empty()) {
+    throw ParameterError("--stickout describes --tool; a library's tools carry their own");
+  }
   const std::string voxel = text("voxel");
   job.voxel = voxel.empty() ? 2.0 * job.cutter.radius() / 20.0
                             : parseQuantity(voxel, Dimension::Length, sys, "--voxel").value;

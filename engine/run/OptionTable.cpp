@@ -70,6 +70,15 @@ std::vector<OptionInfo> makeTable() {
       quantity("flute-length", G::Tool, D::Length,
                "cutting height h above the tip (default 3 D, at least the cone of a chamfer)"),
       plain("flutes", K::Count, G::Tool, "2", "number of flutes"),
+      quantity("shank-diameter", G::Tool, D::Length,
+               "--tool's shank diameter (default: the cutter's), checked for collisions up to "
+               "--stickout"),
+      quantity("stickout", G::Tool, D::Length,
+               "--tool's length out of the holder, tip to holder face: the shank above the "
+               "flutes and the --holder above it must never meet material"),
+      plain("holder", K::Text, G::Tool, "",
+            "--tool's holder from its face up, segments DIAMETERxHEIGHT or "
+            "LOWER-UPPERxHEIGHT, e.g. 22x10,28-40x30 (needs --stickout)"),
       plain("stock", K::Text, G::Stock, "",
             "box:X0,Y0,Z0,X1,Y1,Z1 (program units) or a closed STL/OBJ/PLY mesh (mm); schedule "
             "--model analytic runs without one"),

@@ -136,6 +136,13 @@ void finish(Agreement& a) {
 
 }  // namespace
 
+const std::vector<ToolPart>& CutterSet::partsOf(int tool) const {
+  const auto it = partsByTool.find(tool);
+  if (it != partsByTool.end()) return it->second;
+  static const std::vector<ToolPart> none;
+  return byTool.count(tool) ? none : fallbackParts;  // a library tool without parts: none
+}
+
 const AptCutter& CutterSet::of(int tool) const {
   const auto it = byTool.find(tool);
   if (it != byTool.end()) return it->second;
@@ -207,13 +214,16 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   const double stockTop = stock.bounds().max.z();
   // Each tool's non-cutting parts with their shapes a cell slimmer (see below).
   std::map<int, std::vector<std::pair<ToolPart, AptCutter>>> slimParts;
-  for (const auto& [tool, parts] : cutters.partsByTool)
-    for (const ToolPart& part : parts) {
+  for (const Move& m : path.moves) {
+    if (slimParts.count(m.tool)) continue;
+    auto& list = slimParts[m.tool];
+    for (const ToolPart& part : cutters.partsOf(m.tool)) {
       AptParameters slim = part.shape.parameters();
       slim.radius = std::max(0.5 * slim.radius, slim.radius - h);
       slim.cornerCenterRadial = std::max(0.0, slim.radius - slim.cornerRadius);
-      slimParts[tool].emplace_back(part, AptCutter::fromApt(slim, 2, CutterShape::General));
+      list.emplace_back(part, AptCutter::fromApt(slim, 2, CutterShape::General));
     }
+  }
 
   // Plan the steps first (for progress and for the records).
   const std::vector<Planned> plan = planSteps(path, L, options.maxSteps);

@@ -47,8 +47,12 @@ struct ToolPart {
 struct CutterSet {
   std::map<int, AptCutter> byTool;
   std::optional<AptCutter> fallback;
-  /// The non-cutting parts of each tool (none when the library does not describe them).
+  /// The non-cutting parts of each tool (none when the library does not describe them), and
+  /// those of the fallback cutter (--tool's --stickout, --shank-diameter, --holder).
   std::map<int, std::vector<ToolPart>> partsByTool;
+  std::vector<ToolPart> fallbackParts;
+  /// The parts of tool `tool`: its own, else (no cutter of its own) the fallback's.
+  const std::vector<ToolPart>& partsOf(int tool) const;
   /// The cutter of tool `tool`. Throws ParameterError when there is none.
   const AptCutter& of(int tool) const;
   /// The smallest radius among them, mm.
