@@ -13,8 +13,11 @@ int runBatchCommand(const BatchOptions& o) {
   std::fputs(report.text.c_str(), stdout);
   for (const std::string& f : report.failures)
     std::fprintf(stderr, "engage: %s\n", f.c_str());
+  for (const std::string& c : report.collisions)
+    std::fprintf(stderr, "engage: %s\n", c.c_str());
   // 4: the batch ran, some jobs failed (their records hold the errors); not a crash (3).
-  return report.failures.empty() ? 0 : 4;
+  // 5: all ran, and some met material with what must not cut (as simulate's 5).
+  return !report.failures.empty() ? 4 : report.collisions.empty() ? 0 : 5;
 }
 
 }  // namespace

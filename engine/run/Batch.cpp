@@ -410,6 +410,11 @@ BatchReport runBatch(const BatchOptions& o) {
       const ordered_json r = recordOf(j, jobs);
       if (!r.is_null() && r["status"] != "ok")
         result.failures.push_back("job " + j.name + " failed: " + r["error"].get<std::string>());
+      else if (!r.is_null() && r.contains("collisions") && r["collisions"].is_number() &&
+               r["collisions"].get<std::size_t>() > 0)
+        result.collisions.push_back("job " + j.name + ": " +
+                                    std::to_string(r["collisions"].get<std::size_t>()) +
+                                    " collision(s), in its summary.json");
     }
   return result;
 }

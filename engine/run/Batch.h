@@ -41,6 +41,8 @@ struct BatchOptions {
 struct BatchReport {
   std::string text;                   ///< the lines for stdout
   std::vector<std::string> failures;  ///< "job NAME failed: ERROR", one per failed job
+  /// "job NAME: N collision(s) ...", one per job whose rapids, shank or holder met material.
+  std::vector<std::string> collisions;
 };
 
 /// Run the shard's jobs that have no record yet (and failed ones with retryFailed); with
