@@ -3,7 +3,7 @@
 /// printed as one line on stderr, and turned into a non-zero exit status:
 /// 0 success, 1 invalid input (a parameter, a unit, a file), 2 command-line usage,
 /// 3 internal error, 4 a batch ran but some of its jobs failed (their records hold the errors),
-/// 5 a simulate or schedule run completed but a rapid, a shank or a holder met material.
+/// 5 a simulate, schedule or batch run completed but a rapid, a shank or a holder met material.
 
 #include "apps/AnalyzeCommand.h"
 #include "apps/BatchCommand.h"

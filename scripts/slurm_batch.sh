@@ -11,8 +11,9 @@
 #   ENGAGE may be a command with arguments, e.g. ENGAGE="apptainer exec engage.sif engage"
 #   (compute nodes rarely have Debian's OpenVDB and TBB).
 #
-# A task whose shard holds a failed job exits 4 (the error is in OUT/jobs/NAME/job.json); the
-# merge runs anyway and lists every job. Jobs with a record for the same options and files are
+# A task whose shard holds a failed job exits 4 (the error is in OUT/jobs/NAME/job.json), one
+# whose jobs ran but met material with a rapid, shank or holder exits 5; the merge runs anyway
+# (afterany) and lists every job. Jobs with a record for the same options and files are
 # not run again, and a job never runs in two tasks at once (a lock per job).
 #
 #   scripts/slurm_batch.sh task MANIFEST OUT SHARDS   (what each array task runs)
