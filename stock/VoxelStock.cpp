@@ -655,6 +655,35 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   return before * std::max(0.0, left) / held;
 }
 
+/// Half the diagonal of a leaf of voxels of size h, mm.
+double leafHalfDiagonal(double h) {
+  return 0.5 * std::sqrt(3.0) * kLeafDim * h;
+}
+
+/// The leaf-sized blocks of the index box [lo, hi] that hold material and that the sweep may
+/// reach: `visit(origin, leaf, distance)` with the block's leaf (null for a material tile) and
+/// the sweep's signed distance from the block's centre. Used by the removal and by the
+/// material query, so that both see the same blocks.
+template <class Accessor, class Visit>
+void forBlocksInReach(Accessor& acc, const Sweep& sweep, double h, const Coord& lo, const Coord& hi,
+                      Visit&& visit) {
+  const double reach = leafHalfDiagonal(h) + h;
+  auto floorLeaf = [](int v) { return v & ~(kLeafDim - 1); };
+  for (int x = floorLeaf(lo.x()); x <= hi.x(); x += kLeafDim)
+    for (int y = floorLeaf(lo.y()); y <= hi.y(); y += kLeafDim)
+      for (int z = floorLeaf(lo.z()); z <= hi.z(); z += kLeafDim) {
+        const Coord origin(x, y, z);
+        const Leaf* leaf = acc.probeConstLeaf(origin);
+        if (leaf ? leaf->isEmpty() : (!acc.isValueOn(origin) || acc.getValue(origin) <= 0.0f))
+          continue;  // all air
+        const double c = 0.5 * (kLeafDim - 1);
+        const double dc =
+            sweep.signedDistance(Eigen::Vector3d(x * h + c * h, y * h + c * h, z * h + c * h));
+        if (dc > reach) continue;  // out of reach
+        visit(origin, leaf, dc);
+      }
+}
+
 }  // namespace
 
 struct VoxelStock::Impl {
@@ -671,7 +700,6 @@ struct VoxelStock::Impl {
   /// Removals so far: the serial number of the planes a removal makes.
   int removals = 0;
 
-  openvdb::Vec3d world(const Coord& c) const { return openvdb::Vec3d(c.x(), c.y(), c.z()) * h; }
   Coord index(const Eigen::Vector3d& p) const {
     return Coord(static_cast<int>(std::floor(p.x() / h + 0.5)),
                  static_cast<int>(std::floor(p.y() / h + 0.5)),
@@ -904,34 +932,23 @@ double VoxelStock::materialInside(const Sweep& sweep, double top) const {
   wb.max.z() = std::min(wb.max.z(), top);
   const Coord lo = s.index(wb.min) - Coord(1);
   const Coord hi = s.index(wb.max) + Coord(1);
-  const double leafHalfDiagonal = 0.5 * std::sqrt(3.0) * kLeafDim * h;
   auto acc = s.grid->getConstAccessor();
-  auto floorLeaf = [](int v) { return v & ~(kLeafDim - 1); };
   double sum = 0.0;
-  for (int x = floorLeaf(lo.x()); x <= hi.x(); x += kLeafDim)
-    for (int y = floorLeaf(lo.y()); y <= hi.y(); y += kLeafDim)
-      for (int z = floorLeaf(lo.z()); z <= hi.z(); z += kLeafDim) {
-        const Coord origin(x, y, z);
-        const Leaf* leaf = acc.probeConstLeaf(origin);
-        if (leaf ? leaf->isEmpty() : (!acc.isValueOn(origin) || acc.getValue(origin) <= 0.0f))
-          continue;  // all air
-        const openvdb::Vec3d c = s.world(origin) + openvdb::Vec3d(0.5 * (kLeafDim - 1) * h);
-        if (sweep.signedDistance(Eigen::Vector3d(c.x(), c.y(), c.z())) > leafHalfDiagonal + h)
-          continue;  // out of reach
-        const Coord from = Coord::maxComponent(origin, lo);
-        const Coord to = Coord::minComponent(origin + Coord(kLeafDim - 1), hi);
-        for (int ix = from.x(); ix <= to.x(); ++ix)
-          for (int iy = from.y(); iy <= to.y(); ++iy)
-            for (int iz = from.z(); iz <= to.z(); ++iz) {
-              const Coord ijk(ix, iy, iz);
-              // A leaf's voxel, or a material tile's value.
-              const float f =
-                  leaf ? (leaf->isValueOn(ijk) ? leaf->getValue(ijk) : 0.0f) : acc.getValue(ijk);
-              if (f <= 0.0f || (iz - 0.5) * h > top) continue;
-              if (sweep.signedDistance(Eigen::Vector3d(ix * h, iy * h, iz * h)) < 0.0)
-                sum += static_cast<double>(f);
-            }
-      }
+  forBlocksInReach(acc, sweep, h, lo, hi, [&](const Coord& origin, const Leaf* leaf, double) {
+    const Coord from = Coord::maxComponent(origin, lo);
+    const Coord to = Coord::minComponent(origin + Coord(kLeafDim - 1), hi);
+    for (int ix = from.x(); ix <= to.x(); ++ix)
+      for (int iy = from.y(); iy <= to.y(); ++iy)
+        for (int iz = from.z(); iz <= to.z(); ++iz) {
+          const Coord ijk(ix, iy, iz);
+          // A leaf's voxel, or a material tile's value.
+          const float f =
+              leaf ? (leaf->isValueOn(ijk) ? leaf->getValue(ijk) : 0.0f) : acc.getValue(ijk);
+          if (f <= 0.0f || (iz - 0.5) * h > top) continue;
+          if (sweep.signedDistance(Eigen::Vector3d(ix * h, iy * h, iz * h)) < 0.0)
+            sum += static_cast<double>(f);
+        }
+  });
   return sum * h * h * h;
 }
 
@@ -985,27 +1002,17 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
   const Coord lo = s.index(wb.min) - Coord(1);
   const Coord hi = s.index(wb.max) + Coord(1);
   // Leaves the step may touch: existing leaves, and material tiles split only where reached.
-  const double leafHalfDiagonal = 0.5 * std::sqrt(3.0) * kLeafDim * h;
+  const double halfDiagonal = leafHalfDiagonal(h);
   std::vector<Leaf*> leaves;
   std::vector<LeafPlanes*> leafPlanes;
   std::vector<double> centreDistance;
   auto acc = s.grid->getAccessor();
-  auto floorLeaf = [](int v) { return v & ~(kLeafDim - 1); };
-  for (int x = floorLeaf(lo.x()); x <= hi.x(); x += kLeafDim)
-    for (int y = floorLeaf(lo.y()); y <= hi.y(); y += kLeafDim)
-      for (int z = floorLeaf(lo.z()); z <= hi.z(); z += kLeafDim) {
-        const Coord origin(x, y, z);
-        Leaf* leaf = acc.probeLeaf(origin);
-        if (leaf ? leaf->isEmpty() : (!acc.isValueOn(origin) || acc.getValue(origin) <= 0.0f))
-          continue;  // all air
-        const openvdb::Vec3d c = s.world(origin) + openvdb::Vec3d(0.5 * (kLeafDim - 1) * h);
-        const double dc = sweep.signedDistance(Eigen::Vector3d(c.x(), c.y(), c.z()));
-        if (dc > leafHalfDiagonal + h) continue;  // out of reach
-        if (!leaf) leaf = acc.touchLeaf(origin);  // split a material tile (serially)
-        leaves.push_back(leaf);
-        leafPlanes.push_back(&s.planes[leafKey(origin)]);  // (node addresses are stable)
-        centreDistance.push_back(dc);
-      }
+  forBlocksInReach(acc, sweep, h, lo, hi, [&](const Coord& origin, const Leaf*, double dc) {
+    // The leaf itself (a material tile split into one here, serially).
+    leaves.push_back(acc.touchLeaf(origin));
+    leafPlanes.push_back(&s.planes[leafKey(origin)]);  // (node addresses are stable)
+    centreDistance.push_back(dc);
+  });
 
   // Feed direction at the step's end, for the width and the engagement angle.
   const StepPath& path = sweep.path();
@@ -1020,7 +1027,7 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
     Leaf& leaf = *leaves[li];
     LeafPlanes& planes = *leafPlanes[li];
     LeafResult& r = results[li];
-    const bool allInside = centreDistance[li] < -(leafHalfDiagonal + 0.5 * h);
+    const bool allInside = centreDistance[li] < -(halfDiagonal + 0.5 * h);
     // Only the part of the leaf inside the step's (index) bounds can change.
     const Coord o = leaf.origin();
     const Coord from = Coord::maxComponent(o, lo);

@@ -236,13 +236,17 @@ void chooseCutters(Job& job, const std::optional<ToolLibrary>& lib,
     throw ParameterError(job.program +
                          ": the program loads no tool (no T.. M6 or M61 Q..): give --tool for "
                          "the tool in the spindle");
+  // A library tool into the job: its entry, its cutter, its shank and holder.
+  auto load = [&](int tool) {
+    if (job.tools.count(tool)) return;
+    const ToolEntry& e = lib->require(tool);
+    job.tools.emplace(tool, e);
+    job.cutters.byTool.emplace(tool, *e.cutter);
+    job.cutters.partsByTool[tool] = toolParts(e);
+  };
   for (const ToolChange& c : changes) {
-    if (job.tools.count(c.tool)) continue;
     try {
-      const ToolEntry& e = lib->require(c.tool);
-      job.tools.emplace(c.tool, e);
-      job.cutters.byTool.emplace(c.tool, *e.cutter);
-      job.cutters.partsByTool[c.tool] = toolParts(e);
+      load(c.tool);
     } catch (const ParameterError& err) {
       throw ParameterError(job.path.files[static_cast<std::size_t>(c.file)] + ":" +
                            std::to_string(c.line) + ": T" + std::to_string(c.tool) + ": " +
@@ -254,12 +258,7 @@ void chooseCutters(Job& job, const std::optional<ToolLibrary>& lib,
     job.cutters.byTool.emplace(0, *single);
   } else {
     job.startTool = defaultTool != 0 ? defaultTool : changes.front().tool;
-    if (!job.tools.count(job.startTool)) {
-      const ToolEntry& e = lib->require(job.startTool);
-      job.tools.emplace(job.startTool, e);
-      job.cutters.byTool.emplace(job.startTool, *e.cutter);
-      job.cutters.partsByTool[job.startTool] = toolParts(e);
-    }
+    load(job.startTool);
     job.cutters.byTool.emplace(0, job.cutters.byTool.at(job.startTool));
     job.cutters.partsByTool[0] = job.cutters.partsByTool[job.startTool];
   }

@@ -141,10 +141,20 @@ std::map<int, ToolTotals> toolTotals(const RunResult& result) {
   return totals;
 }
 
+/// The library number of the steps of tool `tool`: tool 0 (before any change) is the start
+/// tool when the library gives it.
+int libraryNumber(const Job& job, int tool) {
+  return tool == 0 && job.startTool != 0 ? job.startTool : tool;
+}
+
+/// The source file of a collision's move.
+const std::string& fileOf(const Job& job, const Collision& c) {
+  return job.path.files[static_cast<std::size_t>(job.path.moves[c.move].file)];
+}
+
 /// The tool's name: the library's (else its kind and diameter), else --tool's.
 std::string toolName(const Job& job, int tool) {
-  const int number = tool == 0 && job.startTool != 0 ? job.startTool : tool;
-  const auto entry = job.tools.find(number);
+  const auto entry = job.tools.find(libraryNumber(job, tool));
   if (entry == job.tools.end()) return job.toolText;
   const ToolEntry& e = entry->second;
   if (!e.name.empty()) return e.name;
@@ -159,9 +169,9 @@ ordered_json toolsJson(const RunResult& result) {
   const std::map<int, ToolTotals> totals = toolTotals(result);
   ordered_json out = ordered_json::array();
   for (const auto& [tool, t] : totals) {
-    const auto entry = job.tools.find(tool == 0 && job.startTool != 0 ? job.startTool : tool);
+    const auto entry = job.tools.find(libraryNumber(job, tool));
     ordered_json j{{"number", tool}};
-    if (tool == 0 && job.startTool != 0) j["taken_as"] = job.startTool;
+    if (libraryNumber(job, tool) != tool) j["taken_as"] = job.startTool;
     j["name"] = toolName(job, tool);
     if (entry != job.tools.end()) j["defined_at"] = entry->second.origin;
     j["cutter"] = describeCutter(job.cutters.of(tool), sys);
@@ -217,8 +227,7 @@ std::string summaryJson(const RunResult& result) {
     ordered_json list = ordered_json::array();
     for (std::size_t i = 0; i < r.collisions.size() && i < 1000; ++i) {
       const Collision& c = r.collisions[i];
-      const Move& m = job.path.moves[c.move];
-      list.push_back({{"file", job.path.files[static_cast<std::size_t>(m.file)]},
+      list.push_back({{"file", fileOf(job, c)},
                       {"line", c.line},
                       {"tool", c.tool},
                       {"part", c.part},
@@ -382,11 +391,9 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
   // Collisions: the first ten places, the rest in summary.json.
   for (std::size_t i = 0; i < r.collisions.size() && i < 10; ++i) {
     const Collision& c = r.collisions[i];
-    const Move& m = job.path.moves[c.move];
-    appendf(report, "collision: %s:%d: T%d %s met %s (steps %zu-%zu)\n",
-            job.path.files[static_cast<std::size_t>(m.file)].c_str(), c.line, c.tool,
-            c.part == "rapid" ? "rapid" : c.part.c_str(), q(c.volume, Dimension::Volume).c_str(),
-            c.firstStep, c.lastStep);
+    appendf(report, "collision: %s:%d: T%d %s met %s (steps %zu-%zu)\n", fileOf(job, c).c_str(),
+            c.line, c.tool, c.part.c_str(), q(c.volume, Dimension::Volume).c_str(), c.firstStep,
+            c.lastStep);
   }
   if (r.collisions.size() > 10)
     appendf(report, "collision: %zu more places in summary.json\n", r.collisions.size() - 10);

@@ -251,14 +251,9 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
     double& target = out.targets[tool];
     const auto given = o.targetByTool.find(tool);
     target = given != o.targetByTool.end() ? given->second : o.targetMrr;
-    if (target > 0.0) continue;
-    if (values.empty()) {
-      if (steady.size() == 1)
-        throw ParameterError(
-            "--target-mrr auto needs steady straight cutting steps; this program has none: give "
-            "a target");
-      continue;  // this tool keeps its programmed feeds (NoTarget)
-    }
+    // A tool without steady steps keeps its programmed feeds (NoTarget); if no tool has any,
+    // the check below refuses the run.
+    if (target > 0.0 || values.empty()) continue;
     std::nth_element(values.begin(), values.begin() + static_cast<long>(values.size() / 2),
                      values.end());
     target = values[values.size() / 2];

@@ -7,43 +7,45 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
-#include <fstream>
 #include <limits>
-#include <sstream>
 
 namespace engage {
 
-bool isCamoticsProject(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
+namespace {
+
+/// A file name's extension in lower case (".camotics", ".tpl").
+std::string extension(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
   for (char& c : ext)
     c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".camotics";
+  return ext;
+}
+
+}  // namespace
+
+bool isCamoticsProject(const std::string& path) {
+  return extension(path) == ".camotics";
 }
 
 CamoticsProject readCamoticsProject(const std::string& path) {
   namespace fs = std::filesystem;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ParameterError(path + ": cannot read the CAMotics project");
-  std::ostringstream text;
-  text << in.rdbuf();
+  const std::string text = readToolFile(path, "CAMotics project");
   CamoticsProject p;
   p.path = path;
-  const nlohmann::json doc = nlohmann::json::parse(text.str(), nullptr, false);
+  // (Parsed here and again by parseToolLibrary: a project is a few kB.)
+  const nlohmann::json doc = nlohmann::json::parse(text, nullptr, false);
   if (!doc.is_discarded() &&
       !(doc.is_object() && doc.contains("tools") && doc.at("tools").is_object()))
     throw ParameterError(path + ": a CAMotics project has a \"tools\" object; this file has none");
   // The tool table, with the checks of every library format (and its message for bad JSON).
-  p.tools = parseToolLibrary(text.str(), path);
+  p.tools = parseToolLibrary(text, path);
   const fs::path dir = fs::path(path).parent_path();
   if (!doc.contains("files") || !doc.at("files").is_array() || doc.at("files").empty())
     throw ParameterError(path + ": \"files\": expected the list of the project's programs");
   for (const auto& f : doc.at("files")) {
     if (!f.is_string()) throw ParameterError(path + ": \"files\": expected file names");
     const fs::path file = dir / f.get<std::string>();
-    std::string ext = file.extension().string();
-    for (char& c : ext)
-      c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext == ".tpl")
+    if (extension(file) == ".tpl")
       throw ParameterError(path + ": \"" + f.get<std::string>() +
                            "\" is a TPL program (CAMotics' JavaScript tool-path language), "
                            "which engage does not run: export its G-code from CAMotics "

@@ -21,7 +21,7 @@ using nlohmann::json;
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kInch = 25.4;
 constexpr double kDeg = kPi / 180.0;
-/// A tool library bigger than this is not a tool library.
+/// A tool library (or project) bigger than this is not one.
 constexpr std::uintmax_t kMaxLibraryBytes = 64u << 20;
 
 std::string num(double v) {
@@ -34,22 +34,6 @@ std::string lower(std::string s) {
   for (char& c : s)
     c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
-}
-
-std::string readText(const std::string& path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) throw ParameterError(path + ": is a folder, not a tool library");
-  const auto size = fs::file_size(path, ec);
-  if (ec) throw ParameterError(path + ": cannot read the tool library (" + ec.message() + ")");
-  if (size > kMaxLibraryBytes)
-    throw ParameterError(path + ": " + std::to_string(size) +
-                         " bytes is too large for a tool library (64 MiB at most)");
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  if (!in && !in.eof()) throw ParameterError(path + ": cannot read the tool library");
-  return s.str();
 }
 
 /// The cutting part of a tool from its shape words, all in mm and radians. `build` throws
@@ -354,7 +338,7 @@ void readFreecadLibrary(const json& doc, ToolLibrary& lib) {
     } else {
       e.origin = found.string();
       try {
-        readFreecadBit(parseJson(readText(found.string()), found.string()), e);
+        readFreecadBit(parseJson(readToolFile(found.string(), "tool bit"), found.string()), e);
       } catch (const Error& err) {
         e.problem = err.what();
       }
@@ -533,6 +517,22 @@ void readLinuxcnc(const std::string& textIn, ToolLibrary& lib, const ToolLibrary
 
 }  // namespace
 
+std::string readToolFile(const std::string& path, const std::string& what) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw ParameterError(path + ": is a folder, not a " + what);
+  const auto size = fs::file_size(path, ec);
+  if (ec) throw ParameterError(path + ": cannot read the " + what + " (" + ec.message() + ")");
+  if (size > kMaxLibraryBytes)
+    throw ParameterError(path + ": " + std::to_string(size) + " bytes is too large for a " + what +
+                         " (64 MiB at most)");
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  if (!in && !in.eof()) throw ParameterError(path + ": cannot read the " + what);
+  return s.str();
+}
+
 std::vector<const ToolEntry*> ToolLibrary::numbered(int number) const {
   std::vector<const ToolEntry*> out;
   for (const ToolEntry& e : tools)
@@ -604,7 +604,7 @@ ToolLibrary parseToolLibrary(const std::string& text, const std::string& path,
 }
 
 ToolLibrary readToolLibrary(const std::string& path, const ToolLibraryOptions& options) {
-  return parseToolLibrary(readText(path), path, options);
+  return parseToolLibrary(readToolFile(path, "tool library"), path, options);
 }
 
 }  // namespace engage

@@ -70,6 +70,11 @@ struct ToolLibraryOptions {
   bool linuxcncInch = false;
 };
 
+/// The text of a tool library, tool bit or project file (64 MiB at most). Throws
+/// ParameterError naming the file and `what` it was to be ("tool library", "CAMotics project")
+/// for a folder, a file that cannot be read or one too large.
+std::string readToolFile(const std::string& path, const std::string& what);
+
 /// Read a library, its format told by its content: JSON with "data" (Fusion 360), with
 /// "tools" (a .camotics project or a FreeCAD .fctl), with "shape" (one FreeCAD .fctb), else a
 /// LinuxCNC table. Throws ParameterError for a file that cannot be read or parsed at all,
