@@ -409,6 +409,27 @@ double DexelStock::materialInside(const Sweep& sweep, double top) const {
   return sum * h_ * h_;
 }
 
+std::vector<double> DexelStock::materialAt(const std::vector<Eigen::Vector3d>& points) const {
+  std::vector<double> out;
+  out.reserve(points.size());
+  // The share of ray (i, j) at height z: its interval's share there, times the column's.
+  auto at = [&](int i, int j, double z) {
+    if (i < 0 || j < 0 || i >= nx_ || j >= ny_) return 0.0;
+    for (const Interval& piece : rays_[index(i, j)])
+      if (z >= piece.z0 && z < piece.z1) return piece.f * weight_[index(i, j)];
+    return 0.0;
+  };
+  for (const Eigen::Vector3d& p : points) {
+    // Ray (i, j) stands at x0 + (i + 1/2) h.
+    const double gx = (p.x() - x0_) / h_ - 0.5, gy = (p.y() - y0_) / h_ - 0.5;
+    const int i = static_cast<int>(std::floor(gx)), j = static_cast<int>(std::floor(gy));
+    const double tx = gx - i, ty = gy - j;
+    out.push_back((1 - tx) * (1 - ty) * at(i, j, p.z()) + tx * (1 - ty) * at(i + 1, j, p.z()) +
+                  (1 - tx) * ty * at(i, j + 1, p.z()) + tx * ty * at(i + 1, j + 1, p.z()));
+  }
+  return out;
+}
+
 Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
   const Box3 sb = sweep.bounds();
   const StepPath& path = sweep.path();
@@ -575,6 +596,7 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
     }
     out.lateral /= out.volume;
     out.axialDepth = std::min(zMax - std::max(zMin, 0.0), cutter.height());
+    out.top = std::min(zMax, cutter.height());
     out.radialWidth = sMax - sMin;
     // Engagement angle: the arc of the periphery, at mid depth, where this step removed
     // material (rays within a column of the cutter's edge there).

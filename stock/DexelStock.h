@@ -48,6 +48,7 @@ class DexelStock : public Stock {
   Box3 bounds() const override;
   Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) override;
   double materialInside(const Sweep& sweep, double top) const override;
+  std::vector<double> materialAt(const std::vector<Eigen::Vector3d>& points) const override;
 
   /// Rays in x and y, their spacing, and the grid's corner (mm).
   int raysX() const { return nx_; }

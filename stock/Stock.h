@@ -8,7 +8,10 @@
 #include "cutters/AptCutter.h"
 #include "cutters/Sweep.h"
 
+#include <Eigen/Core>
+
 #include <cstddef>
+#include <vector>
 
 namespace engage {
 
@@ -17,6 +20,7 @@ struct Removal {
   double volume = 0.0;         ///< removed volume, mm^3
   double axialDepth = 0.0;     ///< extent of the removed material along the tool axis, mm
   double radialWidth = 0.0;    ///< extent across the feed direction (at the step end), mm
+  double top = 0.0;            ///< height of the removed material's top above the tip, mm
   double engagementRad = 0.0;  ///< angle of the cutter's periphery in contact, rad
   /// Volume-weighted mean offset of the removed material across the feed direction, mm:
   /// + on the left of the direction of travel (seen from +Z). Tells which side the stock is.
@@ -42,6 +46,11 @@ class Stock {
   /// resolution long, whose centres lie inside. Accurate to about a layer of cells on the
   /// contact's surface.
   virtual double materialInside(const Sweep& sweep, double top) const = 0;
+  /// The material's share at each point, 0 to 1, interpolated between cells (trilinearly
+  /// between voxel centres; bilinearly between rays, each in or out at the point's height):
+  /// about 0.5 on the material's surface. Read after a removal, just outside the cutter, it
+  /// tells which part of the edge is in contact (engine/physics/Engagement.h).
+  virtual std::vector<double> materialAt(const std::vector<Eigen::Vector3d>& points) const = 0;
   /// Remove one step's swept solid; `step` and `dtSeconds` label it (for capture grids).
   virtual Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) = 0;
 };

@@ -952,6 +952,17 @@ double VoxelStock::materialInside(const Sweep& sweep, double top) const {
   return sum * h * h * h;
 }
 
+std::vector<double> VoxelStock::materialAt(const std::vector<Eigen::Vector3d>& points) const {
+  const Impl& s = *impl_;
+  auto acc = s.grid->getAccessor();
+  std::vector<double> out;
+  out.reserve(points.size());
+  for (const Eigen::Vector3d& p : points)
+    out.push_back(static_cast<double>(
+        sampleTrilinear(acc, openvdb::Vec3d(p.x() / s.h, p.y() / s.h, p.z() / s.h))));
+  return out;
+}
+
 double VoxelStock::fraction(int i, int j, int k) const {
   return static_cast<double>(impl_->grid->tree().getValue(Coord(i, j, k)));
 }
@@ -1096,6 +1107,7 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
     if (zMax >= zMin) {  // (only slivers: no width, no depth)
       out.axialDepth = std::max(0.0, std::min(zMax - std::max(zMin, 0.0), cutter.height()));
       out.radialWidth = sMax - sMin;
+      out.top = std::max(0.0, std::min(zMax, cutter.height()));
     }
     // Engagement angle: the part of the periphery, at mid depth, with material just outside
     // the cutter after the cut (the arc of the edge that is cutting).

@@ -75,6 +75,7 @@ class VoxelStock : public Stock {
   /// volume over `dtSeconds`, mm^3/min; 0 when dtSeconds is 0) go to the capture grids.
   Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) override;
   double materialInside(const Sweep& sweep, double top) const override;
+  std::vector<double> materialAt(const std::vector<Eigen::Vector3d>& points) const override;
 
   /// Write stock.vdb: grid "stock" (material fraction) and grid "surface" (the stock's
   /// surface as a narrow-band level set, negative inside, 3 voxels each side). Written to a

@@ -1,0 +1,198 @@
+#include "engine/physics/CuttingForces.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace engage {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kRotationSamples = 90;  ///< per tooth pitch, for the peak
+
+/// Gauss-Legendre nodes and weights on [-1, 1], by Newton's method on P_n.
+struct Gauss {
+  std::vector<double> x, w;
+  explicit Gauss(int n) {
+    for (int i = 0; i < n; ++i) {
+      double z = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 0.0;
+      for (int it = 0; it < 100; ++it) {
+        double p0 = 1.0, p1 = 0.0;
+        for (int k = 1; k <= n; ++k) {
+          const double p2 = p1;
+          p1 = p0;
+          p0 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p2) / k;
+        }
+        dp = n * (z * p0 - p1) / (z * z - 1.0);
+        const double dz = p0 / dp;
+        z -= dz;
+        if (std::abs(dz) < 1e-15) break;
+      }
+      x.push_back(z);
+      w.push_back(2.0 / ((1.0 - z * z) * dp * dp));
+    }
+  }
+};
+
+const Gauss& gauss() {
+  static const Gauss g(16);
+  return g;
+}
+
+/// The tangential, radial and axial force per unit edge length at chip thickness h (mm):
+/// the parts that grow with the chip (each as h^exponent) and the edge parts.
+struct ElementForce {
+  std::array<double, 3> cut{}, edge{};
+};
+
+ElementForce element(const Material& m, double h) {
+  ElementForce f;
+  if (m.model == ForceModel::Linear) {
+    const LinearCoefficients& k = m.linear;
+    f.cut = {k.Ktc * h, k.Krc * h, k.Kac * h};
+    f.edge = {k.Kte, k.Kre, k.Kae};
+  } else {
+    const KienzleCoefficients& k = m.kienzle;
+    f.cut = {k.kc11 * std::pow(h, 1.0 - k.mc), k.kf11 * std::pow(h, 1.0 - k.mf),
+             k.kp11 * std::pow(h, 1.0 - k.mp)};
+  }
+  return f;
+}
+
+/// Tangential, radial, axial components (per unit of each) in the (feed, side, z) frame.
+struct Directions {
+  Eigen::Vector3d t, r, a;
+};
+
+Directions directions(double phi, double kappa) {
+  const double s = std::sin(phi), c = std::cos(phi), sk = std::sin(kappa), ck = std::cos(kappa);
+  Directions d;
+  d.t = Eigen::Vector3d(-c, s, 0.0);
+  d.r = Eigen::Vector3d(-sk * s, -sk * c, ck);
+  d.a = Eigen::Vector3d(ck * s, ck * c, sk);
+  return d;
+}
+
+bool engaged(const EdgeSlice& s, double phi) {
+  for (const auto& arc : s.arcs)
+    if (phi >= arc[0] && phi <= arc[1]) return true;
+  return false;
+}
+
+}  // namespace
+
+StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Teeth& teeth,
+                     double fz, double rpm) {
+  StepLoad out;
+  out.exponent = material.exponent();
+  if (!e.any() || !(fz > 0.0)) return out;
+  const int N = std::max(1, teeth.count);
+  const Gauss& g = gauss();
+  // Mean per revolution: N teeth each sweeping the arcs once in 2 pi.
+  Eigen::Vector3d force(0.0, 0.0, 0.0);
+  double torqueCut = 0.0, torqueEdge = 0.0, hArea = 0.0, area = 0.0;
+  for (const EdgeSlice& s : e.slices) {
+    const double sk = std::sin(s.kappa);
+    const double db = s.dz / std::max(sk, 1e-6);
+    for (const auto& arc : s.arcs) {
+      const double half = 0.5 * (arc[1] - arc[0]), mid = 0.5 * (arc[1] + arc[0]);
+      // The thickest chip: at phi = pi/2 when the arc holds it.
+      const double sinMax = arc[0] <= 0.5 * kPi && arc[1] >= 0.5 * kPi
+                                ? 1.0
+                                : std::max(std::sin(arc[0]), std::sin(arc[1]));
+      out.hMax = std::max(out.hMax, fz * sinMax * sk);
+      for (std::size_t q = 0; q < g.x.size(); ++q) {
+        const double phi = mid + half * g.x[q];
+        const double w = half * g.w[q] * db;
+        const double h = fz * std::max(0.0, std::sin(phi)) * sk;
+        const ElementForce f = element(material, h);
+        const Directions d = directions(phi, s.kappa);
+        force += w * ((f.cut[0] + f.edge[0]) * d.t + (f.cut[1] + f.edge[1]) * d.r +
+                      (f.cut[2] + f.edge[2]) * d.a);
+        torqueCut += w * f.cut[0] * s.radius;
+        torqueEdge += w * f.edge[0] * s.radius;
+        hArea += w * h;
+        area += w;
+      }
+    }
+  }
+  const double perRev = N / (2.0 * kPi);
+  const Eigen::Vector3d feed3(e.feed.x(), e.feed.y(), 0.0), side3(e.side.x(), e.side.y(), 0.0);
+  force *= perRev;
+  out.force = force.x() * feed3 + force.y() * side3 + Eigen::Vector3d(0.0, 0.0, force.z());
+  out.hMean = area > 0.0 ? hArea / area : 0.0;
+  out.torqueCut = perRev * torqueCut / 1000.0;  // N*mm -> N*m
+  out.torqueEdge = perRev * torqueEdge / 1000.0;
+  out.torque = out.torqueCut + out.torqueEdge;
+  out.power = out.torque * 2.0 * kPi * std::abs(rpm) / 60.0;
+
+  // The revolution, every 1/90 of a pitch: per sample the force's parts that scale with the
+  // feed as the tangential, radial and axial exponents, and the edge part.
+  const double pitch = 2.0 * kPi / N;
+  const double lagPerMm = std::tan(teeth.helix) / std::max(teeth.radius, 1e-9);
+  struct Sample {
+    Eigen::Vector3d t{0, 0, 0}, r{0, 0, 0}, a{0, 0, 0}, edge{0, 0, 0};
+  };
+  std::vector<Sample> samples(kRotationSamples);
+  for (int m = 0; m < kRotationSamples; ++m) {
+    Sample& sm = samples[static_cast<std::size_t>(m)];
+    const double theta = pitch * m / kRotationSamples;
+    for (const EdgeSlice& s : e.slices) {
+      const double sk = std::sin(s.kappa);
+      const double db = s.dz / std::max(sk, 1e-6);
+      for (int j = 0; j < N; ++j) {
+        double phi = std::fmod(theta + j * pitch - s.z * lagPerMm, 2.0 * kPi);
+        if (phi < 0.0) phi += 2.0 * kPi;
+        if (!engaged(s, phi)) continue;
+        const double h = fz * std::max(0.0, std::sin(phi)) * sk;
+        const ElementForce f = element(material, h);
+        const Directions d = directions(phi, s.kappa);
+        sm.t += db * f.cut[0] * d.t;
+        sm.r += db * f.cut[1] * d.r;
+        sm.a += db * f.cut[2] * d.a;
+        sm.edge += db * (f.edge[0] * d.t + f.edge[1] * d.r + f.edge[2] * d.a);
+      }
+    }
+  }
+  const bool linear = material.model == ForceModel::Linear;
+  const double pt = linear ? 1.0 : 1.0 - material.kienzle.mc;
+  const double pr = linear ? 1.0 : 1.0 - material.kienzle.mf;
+  const double pa = linear ? 1.0 : 1.0 - material.kienzle.mp;
+  for (std::size_t k = 0; k < kPeakScales.size(); ++k) {
+    const double sc = kPeakScales[k];
+    const double st = std::pow(sc, pt), sr = std::pow(sc, pr), sa = std::pow(sc, pa);
+    double peak = 0.0;
+    for (const Sample& sm : samples)
+      peak = std::max(peak, (st * sm.t + sr * sm.r + sa * sm.a + sm.edge).norm());
+    out.peakAt[k] = peak;
+    if (sc == 1.0) out.peak = peak;
+  }
+  return out;
+}
+
+double scaleForTorque(const StepLoad& load, double torque) {
+  if (load.torqueEdge >= torque) return 0.0;
+  if (!(load.torqueCut > 0.0)) return std::numeric_limits<double>::infinity();
+  return std::pow((torque - load.torqueEdge) / load.torqueCut, 1.0 / load.exponent);
+}
+
+double scaleForPeak(const StepLoad& load, double force) {
+  const auto& s = kPeakScales;
+  const auto& p = load.peakAt;
+  if (p[0] > force) {
+    // Below the first kept scale: towards the edge forces at s = 0, linearly (errs high).
+    const double slope = (p[1] - p[0]) / (s[1] - s[0]);
+    const double atZero = std::max(0.0, p[0] - slope * s[0]);
+    return atZero >= force ? 0.0 : s[0] * (force - atZero) / (p[0] - atZero);
+  }
+  for (std::size_t k = 1; k < s.size(); ++k)
+    if (p[k] > force) return s[k - 1] + (s[k] - s[k - 1]) * (force - p[k - 1]) / (p[k] - p[k - 1]);
+  // Beyond the last: on along the last chord.
+  const std::size_t n = s.size() - 1;
+  const double slope = (p[n] - p[n - 1]) / (s[n] - s[n - 1]);
+  if (!(slope > 0.0)) return std::numeric_limits<double>::infinity();
+  return s[n] + (force - p[n]) / slope;
+}
+
+}  // namespace engage

@@ -1,0 +1,188 @@
+// Tests of engine/physics/CuttingForces.h against the textbook integrals of the linear
+// edge-force model of a flat end mill (Altintas, Manufacturing Automation, 2nd ed., Eq 2.40),
+// derived by hand for straight teeth, axial depth a, feed per tooth c, N teeth, immersion
+// [st, ex]:
+//   Fx = N a c / (8 pi) [Ktc cos 2phi - Krc (2phi - sin 2phi)] + N a / (2 pi) [-Kte sin phi + Kre
+//   cos phi] Fy = N a c / (8 pi) [Ktc (2phi - sin 2phi) + Krc cos 2phi] - N a / (2 pi) [Kte cos phi
+//   + Kre sin phi] Fz = N a / (2 pi) [-Kac c cos phi + Kae phi],     T = N a R / (2 pi) [-Ktc c cos
+//   phi + Kte phi]
+// each evaluated from st to ex (x along the feed, y to the side phi = 0).
+
+#include "engine/physics/CuttingForces.h"
+
+#include "cutters/Sweep.h"
+#include "stock/DexelStock.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+using namespace engage;
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double a = 3.0, c = 0.1, R = 5.0;
+constexpr int N = 3;
+
+Material linearMaterial() {
+  Material m;
+  m.model = ForceModel::Linear;
+  // Al 7075-T6 (data/materials/aluminium-7075-t6.json); any positive set would do.
+  m.linear = {767.01, 168.8, 222.0, 27.7, 26.6, 0.7};
+  return m;
+}
+
+/// A cylinder's contact over depth `depth` in `slices` slices, one arc [st, ex].
+EdgeEngagement cylinder(double st, double ex, double depth = a, int slices = 12) {
+  EdgeEngagement e;
+  e.feed = {1.0, 0.0};
+  e.side = {0.0, 1.0};
+  e.entry = st;
+  e.exit = ex;
+  for (int k = 0; k < slices; ++k) {
+    EdgeSlice s;
+    s.dz = depth / slices;
+    s.z = (k + 0.5) * s.dz;
+    s.radius = R;
+    s.kappa = kPi / 2;
+    s.arcs.push_back({st, ex});
+    e.slices.push_back(s);
+  }
+  return e;
+}
+
+struct Closed {
+  double fx, fy, fz, torque;
+};
+
+Closed closedForm(const LinearCoefficients& k, double st, double ex) {
+  auto fx = [&](double p) {
+    return N * a * c / (8 * kPi) * (k.Ktc * std::cos(2 * p) - k.Krc * (2 * p - std::sin(2 * p))) +
+           N * a / (2 * kPi) * (-k.Kte * std::sin(p) + k.Kre * std::cos(p));
+  };
+  auto fy = [&](double p) {
+    return N * a * c / (8 * kPi) * (k.Ktc * (2 * p - std::sin(2 * p)) + k.Krc * std::cos(2 * p)) -
+           N * a / (2 * kPi) * (k.Kte * std::cos(p) + k.Kre * std::sin(p));
+  };
+  auto fz = [&](double p) { return N * a / (2 * kPi) * (-k.Kac * c * std::cos(p) + k.Kae * p); };
+  auto t = [&](double p) { return N * a * R / (2 * kPi) * (-k.Ktc * c * std::cos(p) + k.Kte * p); };
+  return {fx(ex) - fx(st), fy(ex) - fy(st), fz(ex) - fz(st), (t(ex) - t(st)) / 1000.0};
+}
+
+}  // namespace
+
+TEST_CASE("mean forces and torque of a slot and of half immersion up and down milling",
+          "[physics]") {
+  const Material m = linearMaterial();
+  const double rpm = 10000.0;
+  struct Case {
+    const char* name;
+    double st, ex;
+  };
+  for (const Case& k : {Case{"slot", 0.0, kPi}, Case{"half immersion up milling", 0.0, kPi / 2},
+                        Case{"half immersion down milling", kPi / 2, kPi}}) {
+    CAPTURE(k.name);
+    const StepLoad load = cuttingLoad(cylinder(k.st, k.ex), m, {N, 0.0, R}, c, rpm);
+    const Closed want = closedForm(m.linear, k.st, k.ex);
+    // Gauss-Legendre on trigonometric integrands: exact to round-off (1e-9 relative).
+    CHECK(load.force.x() == Approx(want.fx).epsilon(1e-9).margin(1e-9));
+    CHECK(load.force.y() == Approx(want.fy).epsilon(1e-9).margin(1e-9));
+    CHECK(load.force.z() == Approx(want.fz).epsilon(1e-9).margin(1e-9));
+    CHECK(load.torque == Approx(want.torque).epsilon(1e-9));
+    // Power = T omega.
+    CHECK(load.power == Approx(want.torque * 2 * kPi * rpm / 60.0).epsilon(1e-9));
+    CHECK(load.hMax == Approx(c).epsilon(1e-12));  // every case reaches phi = pi/2
+  }
+  // The slot's hand values (N = 3, a = 3 mm, c = 0.1 mm): Fx = -N a Krc c / 4 - 0 (edge terms
+  // cancel: -Kte (sin pi - sin 0) + Kre (cos pi - cos 0) -> -2 Kre N a / (2 pi)).
+  const StepLoad slot = cuttingLoad(cylinder(0.0, kPi), m, {N, 0.0, R}, c, rpm);
+  CHECK(slot.force.x() ==
+        Approx(-N * a * c * 168.8 / 4.0 - N * a * 26.6 / kPi).epsilon(1e-9));  // -139.75 N
+}
+
+TEST_CASE("chip thinning of a 10 % side cut and the mean chip thickness", "[physics]") {
+  const Material m = linearMaterial();
+  const double D = 2 * R, ae = 0.1 * D;
+  const double ex = std::acos(1.0 - 2.0 * ae / D);
+  const StepLoad load = cuttingLoad(cylinder(0.0, ex), m, {N, 0.0, R}, c, 10000.0);
+  // h_max = f_z 2 sqrt(ae (D - ae)) / D = 0.6 f_z.
+  CHECK(load.hMax == Approx(c * 2.0 * std::sqrt(ae * (D - ae)) / D).epsilon(1e-12));
+  // h_mean over the arc: c (1 - cos ex) / ex.
+  CHECK(load.hMean == Approx(c * (1.0 - std::cos(ex)) / ex).epsilon(1e-9));
+}
+
+TEST_CASE("the peak resultant of a straight-toothed slot and the helix's effect", "[physics]") {
+  const Material m = linearMaterial();
+  const LinearCoefficients& k = m.linear;
+  // Two straight teeth in a slot: one tooth in the cut at a time; the force on it is largest
+  // at phi = pi/2, where its tangential, radial and axial parts are orthogonal.
+  const StepLoad two = cuttingLoad(cylinder(0.0, kPi), m, {2, 0.0, R}, c, 10000.0);
+  const double want =
+      a * std::sqrt(std::pow(k.Ktc * c + k.Kte, 2) + std::pow(k.Krc * c + k.Kre, 2) +
+                    std::pow(k.Kac * c + k.Kae, 2));
+  CHECK(two.peak == Approx(want).epsilon(1e-9));  // phi = pi/2 is one of the samples
+  // A helix spreads the teeth's contact over the revolution: the same means, a lower peak.
+  const StepLoad helix =
+      cuttingLoad(cylinder(0.0, kPi, a, 48), m, {2, 30.0 * kPi / 180, R}, c, 1e4);
+  const StepLoad straight = cuttingLoad(cylinder(0.0, kPi, a, 48), m, {2, 0.0, R}, c, 1e4);
+  CHECK(helix.force.x() == Approx(straight.force.x()).epsilon(1e-12));
+  CHECK(helix.torque == Approx(straight.torque).epsilon(1e-12));
+  CHECK(helix.peak < straight.peak);
+  // The peaks kept for the scheduler grow with the feed and hold the one at scale 1.
+  for (std::size_t i = 1; i < kPeakScales.size(); ++i)
+    CHECK(two.peakAt[i] > two.peakAt[i - 1]);
+  // Torque with the feed: T(s) = s T_cut + T_edge (linear model).
+  const double limit = 0.5 * two.torque;
+  const double s = scaleForTorque(two, limit);
+  CHECK(s * two.torqueCut + two.torqueEdge == Approx(limit).epsilon(1e-12));
+  // The peak at the scale found for a force limit between kept scales is within the chord's
+  // error (convex: at or below the limit), and at a kept scale it is exact.
+  CHECK(scaleForPeak(two, two.peakAt[1]) == Approx(kPeakScales[1]).epsilon(1e-12));
+}
+
+TEST_CASE("Kienzle's model: torque of a slot against its closed form", "[physics]") {
+  Material m;
+  m.model = ForceModel::Kienzle;
+  m.kienzle.kc11 = 1500.0;  // a carbon steel (data/materials/steel-c45.json)
+  m.kienzle.mc = 0.22;
+  const double p = 1.0 - m.kienzle.mc;
+  // T = N a R / (2 pi) kc11 c^p Int_0^pi sin^p, Int_0^pi sin^p = sqrt(pi) G((p+1)/2) / G(p/2+1).
+  const double integral = std::sqrt(kPi) * std::tgamma((p + 1) / 2) / std::tgamma(p / 2 + 1);
+  const double want = N * a * R / (2 * kPi) * 1500.0 * std::pow(c, p) * integral / 1000.0;
+  const StepLoad load = cuttingLoad(cylinder(0.0, kPi), m, {N, 0.0, R}, c, 10000.0);
+  // 16-point Gauss-Legendre on sin^0.78 (its derivative unbounded at the ends): 1e-4.
+  CHECK(load.torque == Approx(want).epsilon(1e-4));
+  CHECK(load.torqueEdge == 0.0);
+  // Only tangential coefficients: the mean force is the tangential one, no axial part.
+  CHECK(load.force.z() == 0.0);
+  // T(s) = s^p T_cut.
+  CHECK(scaleForTorque(load, 0.5 * load.torque) == Approx(std::pow(0.5, 1.0 / p)).epsilon(1e-12));
+}
+
+TEST_CASE("no force in air, and a ball's chip at a shallow depth", "[physics]") {
+  const Material m = linearMaterial();
+  const StepLoad air = cuttingLoad(EdgeEngagement{}, m, {N, 0.5, R}, c, 10000.0);
+  CHECK(air.peak == 0.0);
+  CHECK(air.force.norm() == 0.0);
+  CHECK(air.torque == 0.0);
+  CHECK(air.hMax == 0.0);
+
+  // A 10 mm ball slotting 0.5 mm deep in a dexel block (rays 0.05 mm apart): the thickest
+  // chip is cut at the top of the contact, h = f_z sin(kappa) = f_z r(d) / R with
+  // r(d) = sqrt(d (2R - d)) = 2.18 mm -> 0.436 f_z. The top slice's middle lies up to half a
+  // slice below d (slices 0.025 mm): sin(kappa) there is 1.2 % lower; and the contact's top
+  // is found to a ray spacing: 3 %.
+  const double d = 0.5, hs = 0.05;
+  const AptCutter ball = AptCutter::ball(2 * R, 20.0);
+  Box3 b;
+  b.min = {-30, -20, -20};
+  b.max = {30, 20, 0};
+  DexelStock stock = DexelStock::box(b, hs);
+  StepPath path;
+  path.start = {-40.0, 0.0, -d};
+  path.end = {0.0, 0.0, -d};
+  stock.remove(Sweep(ball, path, hs));
+  const EdgeEngagement e = measureEngagement(stock, ball, {0.0, 0.0, -d}, {1.0, 0.0}, true, d);
+  const StepLoad load = cuttingLoad(e, m, {2, 0.0, R}, c, 10000.0);
+  CHECK(load.hMax == Approx(c * std::sqrt(d * (2 * R - d)) / R).epsilon(0.03));
+}
