@@ -86,6 +86,8 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
                      double fz, double rpm) {
   StepLoad out;
   out.exponent = material.exponent();
+  out.entry = e.entry;
+  out.exit = e.exit;
   if (!e.any() || !(fz > 0.0)) return out;
   const int N = std::max(1, teeth.count);
   const Gauss& g = gauss();
@@ -168,6 +170,22 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
     out.peakAt[k] = peak;
     if (sc == 1.0) out.peak = peak;
   }
+  return out;
+}
+
+ScaledLoad scaleLoad(const StepLoad& load, double s) {
+  ScaledLoad out;
+  out.hMax = load.hMax * s;
+  out.torque = load.torqueCut * std::pow(s, load.exponent) + load.torqueEdge;
+  out.power = load.torque > 0.0 ? out.torque * load.power / load.torque : 0.0;
+  const auto& k = kPeakScales;
+  const auto& p = load.peakAt;
+  std::size_t i = 1;
+  while (i + 1 < k.size() && k[i] < s)
+    ++i;
+  // Between the kept scales, or on along the first or last chord.
+  out.peak = std::max(0.0, p[i - 1] + (p[i] - p[i - 1]) * (s - k[i - 1]) / (k[i] - k[i - 1]));
+  if (std::isnan(load.hMax)) out.hMax = out.peak = out.torque = out.power = load.hMax;
   return out;
 }
 

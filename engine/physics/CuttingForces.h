@@ -41,6 +41,8 @@ constexpr std::array<double, 6> kPeakScales{0.25, 0.5, 1.0, 1.5, 2.0, 4.0};
 
 /// The load of one step at its programmed feed. Machine frame; N, N*m, W, mm.
 struct StepLoad {
+  /// The contact's immersion angles (EdgeEngagement::entry, exit), rad; NaN without contact.
+  double entry = 0.0, exit = 0.0;
   double hMax = 0.0;   ///< largest chip thickness on the engaged edge
   double hMean = 0.0;  ///< chip thickness averaged over the engaged edge and angle
   Eigen::Vector3d force{0.0, 0.0, 0.0};  ///< mean force on the tool per revolution
@@ -58,6 +60,13 @@ struct StepLoad {
 /// `fz` (mm, horizontal) and spindle speed `rpm` (its magnitude). No contact: all zero.
 StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Teeth& teeth,
                      double fz, double rpm);
+
+/// The load's chip thickness, peak force, torque and power at feed scale s (the kept peaks
+/// interpolated; see StepLoad): what a step carries at a scheduled feed.
+struct ScaledLoad {
+  double hMax = 0.0, peak = 0.0, torque = 0.0, power = 0.0;
+};
+ScaledLoad scaleLoad(const StepLoad& load, double s);
 
 /// The largest feed scale s at which `load` keeps its torque at or below `torque` (N*m);
 /// +infinity when even the edge terms alone stay below, 0 when they exceed it.

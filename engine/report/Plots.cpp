@@ -149,6 +149,31 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
     }
     plot("acceleration", acc + "\n");
   }
+  if (p.physics) {
+    // One chart per quantity: at the programmed feeds, at the scheduled ones, the limit.
+    auto physicsPlot = [&](const std::string& name, const std::string& title,
+                           const std::string& column, const std::string& unit, double limit) {
+      std::string body = "set title '" + title + " along the path'\nset xlabel 'arc length (" +
+                         p.lengthLabel + ")'\nset ylabel '" + title + " (" + unit +
+                         ")'\nplot 'steps.csv' using " + x + ":\"" + column +
+                         "\" with lines lw 1.5 title 'programmed feeds'";
+      if (p.schedule) {
+        const std::string scheduled =
+            column.substr(0, column.rfind('_')) + "_scheduled" + column.substr(column.rfind('_'));
+        body +=
+            ", '' using " + x + ":\"" + scheduled + "\" with lines lw 1.5 title 'scheduled feeds'";
+      }
+      if (limit > 0) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%.6g", limit);
+        body += std::string(", ") + buf + " with lines lw 2 lc 'red' title 'limit'";
+      }
+      plot(name, body + "\n");
+    };
+    physicsPlot("chip", "largest chip thickness h_max", "h_max_" + L, p.lengthLabel, p.maxChip);
+    physicsPlot("force", "peak cutting force", "f_peak_" + p.forceTag, p.forceLabel, p.maxForce);
+    physicsPlot("power", "spindle power", "power_" + p.powerTag, p.powerLabel, p.maxPower);
+  }
   script += "unset arrow\nunset label\n";
   plot("topview", "set title 'Top view, coloured by measured MRR (" + p.rateLabel +
                       ")'\nset size ratio -1\nset xlabel 'x (" + p.lengthLabel +

@@ -3,7 +3,8 @@
 /// Plots of a run, drawn by gnuplot (Debian gnuplot-nox) from the run's steps.csv, as PNG and
 /// SVG: the MRR along the path (measured, analytic exact and paper, and after scheduling), the
 /// programmed and scheduled feeds, the tangential acceleration with its limit (paper Fig 14c),
-/// and a top view of the path coloured by MRR.
+/// a top view of the path coloured by MRR, and with the cutting physics the chip thickness,
+/// peak force and spindle power along the path.
 
 #include <string>
 #include <utility>
@@ -25,6 +26,12 @@ struct PlotSpec {
   /// Tool changes: arc length (the plot's units) where each tool starts, and its label ("T2"),
   /// drawn as dashed vertical lines on the plots along the path.
   std::vector<std::pair<double, std::string>> toolChanges;
+  /// Cutting physics (steps.csv has h_max, f_peak, power columns): chip.png, force.png,
+  /// power.png along the path, before and after scheduling, with the schedule's limits (in
+  /// the plot's units; 0: none drawn).
+  bool physics = false;
+  std::string forceTag, powerTag, forceLabel, powerLabel;
+  double maxChip = 0.0, maxForce = 0.0, maxPower = 0.0;
 };
 
 /// Draw the plots; returns the files written (without the folder). Throws Error when gnuplot

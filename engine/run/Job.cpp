@@ -111,6 +111,32 @@ ScheduleOptions scheduleOptions(const OptionValues& values, UnitSystem sys, cons
     throw ParameterError("--min-change: expected a fraction in (0, 1), found " + change);
   s.minSegment = quantity("min-segment", Dimension::Length);
   s.analytic = text("model") == "analytic";
+  const std::pair<const char*, Dimension> limits[] = {{"max-chip", Dimension::Length},
+                                                      {"max-force", Dimension::Force},
+                                                      {"max-torque", Dimension::Torque},
+                                                      {"max-power", Dimension::Power}};
+  double* fields[] = {&s.maxChip, &s.maxForce, &s.maxTorque, &s.maxPower};
+  for (std::size_t k = 0; k < 4; ++k) {
+    const auto& [name, dimension] = limits[k];
+    *fields[k] = quantity(name, dimension);
+    if (!text(name).empty() && !(*fields[k] > 0.0))
+      throw ParameterError(std::string("--") + name + " must be positive, found '" + text(name) +
+                           "'");
+  }
+  if (s.physicsLimits()) {
+    if (text("material").empty())
+      throw ParameterError(
+          "--max-chip, --max-force, --max-torque and --max-power need --material (the "
+          "coefficients the chip and the forces are computed with)");
+    if (s.analytic)
+      throw ParameterError(
+          "--max-chip, --max-force, --max-torque and --max-power need the "
+          "measured engagement: not with --model analytic");
+    if (!text("force-limit").empty())
+      throw ParameterError("give either --force-limit (paper Eq 17-18) or --max-force");
+    // Without an MRR target given, the physics limits alone set the feeds.
+    s.mrrTarget = target != "auto";
+  }
   if (!text("force-limit").empty()) {
     if (target != "auto") throw ParameterError("give either --target-mrr or --force-limit");
     if (text("specific-energy").empty() || text("spindle").empty())
@@ -389,6 +415,27 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   if (!text("depth").empty())
     so.depth = parseQuantity(text("depth"), Dimension::Length, sys, "--depth").value;
   if (job.scheduling()) job.schedule = scheduleOptions(values, sys, job);
+  if (!text("material").empty()) {
+    PhysicsOptions physics;
+    physics.material = readMaterial(text("material"), text("force-model"));
+    if (!text("helix").empty()) {
+      physics.helix = parseQuantity(text("helix"), Dimension::Angle, sys, "--helix").value;
+      if (!(physics.helix >= 0.0 && physics.helix < 1.5))
+        throw ParameterError("--helix: expected an angle in [0, 86) deg, found '" + text("helix") +
+                             "'");
+    }
+    if (!text("spindle").empty()) {
+      physics.spindleRpm =
+          parseQuantity(text("spindle"), Dimension::SpindleSpeed, sys, "--spindle").value;
+      if (!(physics.spindleRpm > 0.0))
+        throw ParameterError("--spindle must be positive, found '" + text("spindle") + "'");
+    }
+    so.physics = physics;
+  } else {
+    for (const char* name : {"force-model", "helix"})
+      if (!text(name).empty())
+        throw ParameterError(std::string("--") + name + " applies with --material");
+  }
   const bool analytic = job.scheduling() && text("model") == "analytic";
   job.materialSide = text("material-side");
   job.materialOnRight = job.materialSide != "left";
@@ -416,6 +463,9 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   if (!stock.empty() && !job.materialSide.empty())
     throw ParameterError("--material-side applies without --stock (the stock tells the side)");
   if (job.crossCheck && stock.empty()) throw ParameterError("--cross-check needs a --stock");
+  if (so.physics && stock.empty())
+    throw ParameterError(
+        "--material needs a --stock: the forces come from the measured engagement");
   if (!(job.crossTolerance > 0.0 && job.crossTolerance < 1.0))
     throw ParameterError("--cross-check-tolerance: expected a fraction in (0, 1)");
   job.stockModel = text("stock-model") == "dexel" ? StockModel::Dexel : StockModel::Voxel;

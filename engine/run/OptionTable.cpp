@@ -99,6 +99,15 @@ std::vector<OptionInfo> makeTable() {
             "most moves a program may make (a loop that never ends is refused at this)"),
       plain("max-steps", K::Count, G::Simulation, "5000000",
             "most steps a run may make (about 150 bytes each)"),
+      plain("material", K::Text, G::Simulation, "",
+            "workpiece material, for the chip thickness, forces, torque and power of every "
+            "step: a bundled name (aluminium-7075-t6, steel-c45, stainless-304, ti-6al-4v) or "
+            "a material .json file"),
+      choice("force-model", G::Simulation, {"linear", "kienzle"}, "",
+             "force model of --material: linear (edge-force coefficients) or kienzle "
+             "(default: the file's choice)"),
+      quantity("helix", G::Simulation, D::Angle,
+               "helix angle of the flutes, for the peak force (default 30deg)"),
       plain("cross-check", K::Flag, G::Simulation, "",
             "also run the other stock model and report the steps where they disagree"),
       plain("cross-check-tolerance", K::Fraction, G::Simulation, "0.03",
@@ -132,8 +141,18 @@ std::vector<OptionInfo> makeTable() {
           "tangential force to hold instead of an MRR (with --specific-energy, --spindle)")),
       scheduleOnly(quantity("specific-energy", G::Schedule, D::SpecificEnergy,
                             "specific cutting energy, e.g. 0.7J/mm3")),
-      scheduleOnly(
-          quantity("spindle", G::Schedule, D::SpindleSpeed, "spindle speed, e.g. 12000rpm")),
+      quantity("spindle", G::Schedule, D::SpindleSpeed,
+               "spindle speed, e.g. 12000rpm: for --force-limit, and for --material where the "
+               "program's spindle is stopped or has no S word"),
+      scheduleOnly(quantity("max-chip", G::Schedule, D::Length,
+                            "largest chip thickness h_max to allow, e.g. 0.05mm (with "
+                            "--material; constant chip load: the usual high-speed target)")),
+      scheduleOnly(quantity("max-force", G::Schedule, D::Force,
+                            "largest peak cutting force to allow, e.g. 400N (with --material)")),
+      scheduleOnly(quantity("max-torque", G::Schedule, D::Torque,
+                            "largest spindle torque to allow, e.g. 5Nm (with --material)")),
+      scheduleOnly(quantity("max-power", G::Schedule, D::Power,
+                            "largest spindle power to allow, e.g. 3kW (with --material)")),
       scheduleOnly(
           choice("material-side", G::Schedule, {"right", "left"}, "",
                  "without --stock: the stock's side of the path (default right: climb, M3)")),

@@ -50,6 +50,7 @@ void checkReach(const Job& job, const Stock& stock) {
 CrossCheck crossCheck(const Job& job, const SimulationResult& r, Stock& other) {
   CrossCheck c;
   SimulationOptions oo = job.simulation;
+  oo.physics.reset();  // the cross-check compares removed volumes only
   oo.progress = nullptr;
   c.other = simulate(job.path, job.cutters, other, oo);
   c.floorVolume = 4.0 * job.voxel * job.voxel * job.voxel;

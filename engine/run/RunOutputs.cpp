@@ -29,6 +29,19 @@ PlotSpec plotSpec(const RunResult& result, const std::filesystem::path& dir) {
   ps.schedule = result.job.scheduling();
   ps.model = result.job.stockModel == StockModel::Dexel ? "dexels" : "voxels";
   ps.accelerationLimit = toDisplay(result.job.schedule.acceleration, Dimension::Acceleration, sys);
+  if (result.job.simulation.physics) {
+    const ScheduleOptions& o = result.job.schedule;
+    ps.physics = true;
+    ps.forceTag = unitTag(Dimension::Force, sys);
+    ps.powerTag = unitTag(Dimension::Power, sys);
+    ps.forceLabel = unitLabel(Dimension::Force, sys);
+    ps.powerLabel = unitLabel(Dimension::Power, sys);
+    if (ps.schedule) {
+      ps.maxChip = toDisplay(o.maxChip, Dimension::Length, sys);
+      ps.maxForce = toDisplay(o.maxForce, Dimension::Force, sys);
+      ps.maxPower = toDisplay(o.maxPower, Dimension::Power, sys);
+    }
+  }
   // Where each tool starts along the path, when the program changes tools.
   const auto& steps = result.sim.steps;
   for (std::size_t i = 1; i < steps.size(); ++i)

@@ -6,6 +6,9 @@
 namespace engage {
 namespace {
 
+constexpr double kHalfPi = 1.5707963267948966;
+constexpr double kDegree = 57.29577951308232;
+
 const char* sideName(PathSide s) {
   return s == PathSide::Concave ? "concave" : s == PathSide::Convex ? "convex" : "straight";
 }
@@ -29,6 +32,10 @@ std::string stepsTable(const RunResult& result) {
   const std::string V(unitTag(Dimension::Volume, sys));
   const std::string Q(unitTag(Dimension::VolumeRate, sys));
   const std::string A(unitTag(Dimension::Acceleration, sys));
+  const bool physics = !result.sim.loads.empty();
+  const std::string N(unitTag(Dimension::Force, sys));
+  const std::string T(unitTag(Dimension::Torque, sys));
+  const std::string P(unitTag(Dimension::Power, sys));
   auto D = [&](double v, Dimension d) { return formatNumber(toDisplay(v, d, sys)); };
   std::string csv =
       "step,move,line,tool,kind,arc_length_" + L + ",x_" + L + ",y_" + L + ",z_" + L + ",feed_" +
@@ -37,7 +44,14 @@ std::string stepsTable(const RunResult& result) {
       ",voxels_changed" +
       (schedule ? ",feed_scheduled_" + F + ",binding,mrr_scheduled_" + Q + ",acceleration_" + A
                 : std::string()) +
-      (cross ? ",removed_" + other + "_" + V + ",cross_check" : std::string()) + "\n";
+      (cross ? ",removed_" + other + "_" + V + ",cross_check" : std::string()) +
+      (physics ? ",entry_deg,exit_deg,h_max_" + L + ",h_mean_" + L + ",fx_" + N + ",fy_" + N +
+                     ",fz_" + N + ",f_peak_" + N + ",torque_" + T + ",power_" + P
+               : std::string()) +
+      (physics && schedule ? ",h_max_scheduled_" + L + ",f_peak_scheduled_" + N +
+                                 ",torque_scheduled_" + T + ",power_scheduled_" + P
+                           : std::string()) +
+      "\n";
   const auto& steps = result.sim.steps;
   const Schedule& plan = result.plan;
   for (std::size_t i = 0; i < steps.size(); ++i) {
@@ -50,7 +64,7 @@ std::string stepsTable(const RunResult& result) {
         D(s.feed, Dimension::Feed) + "," + formatNumber(s.dt) + "," +
         D(s.removed, Dimension::Volume) + "," + D(s.mrr, Dimension::VolumeRate) + "," +
         D(s.width, Dimension::Length) + "," + D(s.depth, Dimension::Length) + "," +
-        formatNumber(s.engagementRad * 57.29577951308232) + "," +
+        formatNumber(s.engagementRad * kDegree) + "," +
         formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," + sideName(s.side) +
         "," + D(s.mrrExact, Dimension::VolumeRate) + "," + D(s.mrrPaper, Dimension::VolumeRate) +
         "," + std::to_string(s.voxelsChanged) +
@@ -61,8 +75,23 @@ std::string stepsTable(const RunResult& result) {
              : std::string()) +
         (cross ? "," + D(result.cross.other.steps[i].removed, Dimension::Volume) +
                      (result.cross.differs[i] ? ",differs" : ",agrees")
-               : std::string()) +
-        "\n";
+               : std::string());
+    if (physics) {
+      // Angles from the feed direction, in the direction of rotation (slot: -90 to 90).
+      const StepLoad& l = result.sim.loads[i];
+      csv += "," + formatNumber((l.entry - kHalfPi) * kDegree) + "," +
+             formatNumber((l.exit - kHalfPi) * kDegree) + "," + D(l.hMax, Dimension::Length) + "," +
+             D(l.hMean, Dimension::Length) + "," + D(l.force.x(), Dimension::Force) + "," +
+             D(l.force.y(), Dimension::Force) + "," + D(l.force.z(), Dimension::Force) + "," +
+             D(l.peak, Dimension::Force) + "," + D(l.torque, Dimension::Torque) + "," +
+             D(l.power, Dimension::Power);
+      if (schedule) {
+        const ScaledLoad a = scaleLoad(l, s.feed > 0.0 ? plan.feed[i] / s.feed : 0.0);
+        csv += "," + D(a.hMax, Dimension::Length) + "," + D(a.peak, Dimension::Force) + "," +
+               D(a.torque, Dimension::Torque) + "," + D(a.power, Dimension::Power);
+      }
+    }
+    csv += "\n";
   }
   return csv;
 }

@@ -94,7 +94,14 @@ ordered_json scheduleJson(const RunResult& result) {
   }
   const double n = static_cast<double>(std::max<std::size_t>(cutting, 1));
   auto rate = [&](double v) { return toDisplay(v, Dimension::VolumeRate, sys); };
-  return {{"target_mrr", rate(plan.targetMrr)},
+  ordered_json limits = ordered_json::object();
+  if (sched.maxChip > 0) limits["max_chip"] = toDisplay(sched.maxChip, Dimension::Length, sys);
+  if (sched.maxForce > 0) limits["max_force"] = toDisplay(sched.maxForce, Dimension::Force, sys);
+  if (sched.maxTorque > 0)
+    limits["max_torque"] = toDisplay(sched.maxTorque, Dimension::Torque, sys);
+  if (sched.maxPower > 0) limits["max_power"] = toDisplay(sched.maxPower, Dimension::Power, sys);
+  return {{"target_mrr", plan.targetMrr > 0 ? ordered_json(rate(plan.targetMrr)) : nullptr},
+          {"physics_limits", limits},
           {"acceleration_limit", num(toDisplay(sched.acceleration, Dimension::Acceleration, sys))},
           {"max_acceleration", toDisplay(plan.maxAcceleration, Dimension::Acceleration, sys)},
           {"jerk_limit", num(toDisplay(sched.jerk, Dimension::Jerk, sys))},
@@ -112,6 +119,74 @@ ordered_json scheduleJson(const RunResult& result) {
           {"feed_pieces", plan.fWords},
           {"steps_limited", counts},
           {"limited_places", places}};
+}
+
+/// The peaks of a run's cutting physics (SimulationResult::loads), at the programmed feeds or,
+/// with `scheduled`, at the scheduled ones: per quantity the largest value and its step.
+struct PhysicsPeaks {
+  double value[4] = {0, 0, 0, 0};  ///< h_max, peak force, torque, power
+  std::size_t step[4] = {0, 0, 0, 0};
+};
+
+PhysicsPeaks physicsPeaks(const RunResult& result, bool scheduled) {
+  PhysicsPeaks p;
+  const auto& loads = result.sim.loads;
+  for (std::size_t i = 0; i < loads.size(); ++i) {
+    const StepRecord& s = result.sim.steps[i];
+    ScaledLoad a{loads[i].hMax, loads[i].peak, loads[i].torque, loads[i].power};
+    if (scheduled) a = scaleLoad(loads[i], s.feed > 0.0 ? result.plan.feed[i] / s.feed : 0.0);
+    const double v[4] = {a.hMax, a.peak, a.torque, a.power};
+    for (int k = 0; k < 4; ++k)
+      if (v[k] > p.value[k]) {  // NaN (no model) never wins
+        p.value[k] = v[k];
+        p.step[k] = i;
+      }
+  }
+  return p;
+}
+
+ordered_json physicsJson(const RunResult& result) {
+  const Job& job = result.job;
+  const UnitSystem sys = job.units;
+  const PhysicsOptions& o = *job.simulation.physics;
+  const Material& m = o.material;
+  const bool linear = m.model == ForceModel::Linear;
+  ordered_json coefficients =
+      linear ? ordered_json{{"Ktc_N_mm2", m.linear.Ktc}, {"Krc_N_mm2", m.linear.Krc},
+                            {"Kac_N_mm2", m.linear.Kac}, {"Kte_N_mm", m.linear.Kte},
+                            {"Kre_N_mm", m.linear.Kre},  {"Kae_N_mm", m.linear.Kae}}
+             : ordered_json{{"kc11_N_mm2", m.kienzle.kc11}, {"mc", m.kienzle.mc},
+                            {"kf11_N_mm2", m.kienzle.kf11}, {"mf", m.kienzle.mf},
+                            {"kp11_N_mm2", m.kienzle.kp11}, {"mp", m.kienzle.mp}};
+  auto peaks = [&](const PhysicsPeaks& p) {
+    const Dimension dims[4] = {Dimension::Length, Dimension::Force, Dimension::Torque,
+                               Dimension::Power};
+    const char* names[4] = {"h_max", "f_peak", "torque", "power"};
+    ordered_json j;
+    for (int k = 0; k < 4; ++k)
+      j[names[k]] = {{"value", toDisplay(p.value[k], dims[k], sys)},
+                     {"step", p.step[k]},
+                     {"line", result.sim.steps.empty() ? 0 : result.sim.steps[p.step[k]].line}};
+    return j;
+  };
+  ordered_json j = {
+      {"material", m.name},
+      {"file", m.path},
+      {"model", linear ? "linear" : "kienzle"},
+      {"coefficients", coefficients},
+      {"source", m.source},
+      {"conditions", m.conditions},
+      {"helix_deg", std::round(o.helix * 57.29577951308232 * 1e9) / 1e9},
+      {"peaks", peaks(physicsPeaks(result, false))},
+      {"steps_without_model",
+       {{"plunge", result.sim.plungeSteps}, {"spindle_stopped", result.sim.stoppedSteps}}},
+      {"unit_labels",
+       {{"chip", std::string(unitLabel(Dimension::Length, sys))},
+        {"force", std::string(unitLabel(Dimension::Force, sys))},
+        {"torque", std::string(unitLabel(Dimension::Torque, sys))},
+        {"power", std::string(unitLabel(Dimension::Power, sys))}}}};
+  if (job.scheduling()) j["peaks_scheduled"] = peaks(physicsPeaks(result, true));
+  return j;
 }
 
 /// What one tool did in a run.
@@ -271,6 +346,7 @@ std::string summaryJson(const RunResult& result) {
                       {"mrr", std::string(unitLabel(Dimension::VolumeRate, sys))},
                       {"feed", std::string(unitLabel(Dimension::Feed, sys))}};
   if (job.scheduling()) j["schedule"] = scheduleJson(result);
+  if (job.simulation.physics) j["physics"] = physicsJson(result);
   return j.dump(2) + "\n";
 }
 
@@ -329,6 +405,14 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
   }
   if (written.openEdges > 0)
     w.push_back("stock.stl has " + std::to_string(written.openEdges) + " open edges");
+  if (result.sim.plungeSteps > 0)
+    w.push_back(std::to_string(result.sim.plungeSteps) +
+                " cutting step(s) plunge straight down: the force model covers the flutes' "
+                "sides, not the end face; their chip and forces are left empty (NaN)");
+  if (result.sim.stoppedSteps > 0)
+    w.push_back(std::to_string(result.sim.stoppedSteps) +
+                " cutting step(s) with the spindle stopped or no S word: no chip or forces; "
+                "give --spindle");
   return w;
 }
 
@@ -386,6 +470,26 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
             100 * c.worstRelative, r.removed > 0 ? 100 * (c.other.removed / r.removed - 1.0) : 0.0,
             other.c_str(), c.other.seconds);
   }
+  if (job.simulation.physics) {
+    // The peaks of the cutting physics, and after scheduling.
+    for (const bool scheduled : {false, true}) {
+      if (scheduled && !job.scheduling()) continue;
+      const PhysicsPeaks p = physicsPeaks(result, scheduled);
+      auto line = [&](int k) { return r.steps.empty() ? 0 : r.steps[p.step[k]].line; };
+      appendf(
+          report, "%s: peak chip %s (line %d), force %s (line %d), torque %s, power %s (line %d)\n",
+          scheduled ? "  scheduled"
+                    : ("physics, " + job.simulation.physics->material.name + ", " +
+                       (job.simulation.physics->material.model == ForceModel::Linear ? "linear"
+                                                                                     : "Kienzle") +
+                       " model")
+                          .c_str(),
+          q(p.value[0], Dimension::Length).c_str(), line(0),
+          q(p.value[1], Dimension::Force).c_str(), line(1),
+          q(p.value[2], Dimension::Torque).c_str(), q(p.value[3], Dimension::Power).c_str(),
+          line(3));
+    }
+  }
   for (const std::string& w : runWarnings(result, written))
     report += "warning: " + w + "\n";
   // Collisions: the first ten places, the rest in summary.json.
@@ -403,6 +507,18 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
     for (const auto& [tool, target] : plan.targets)
       targets += (targets.empty() ? "T" : ", T") + std::to_string(tool) + " " +
                  (target > 0.0 ? q(target, Dimension::VolumeRate) : "none (programmed feeds)");
+  }
+  if (!job.schedule.mrrTarget) {
+    // Physics limits alone: name them.
+    const ScheduleOptions& o = job.schedule;
+    targets.clear();
+    auto add = [&](const char* what, double v, Dimension d) {
+      if (v > 0) targets += (targets.empty() ? "" : ", ") + std::string(what) + " " + q(v, d);
+    };
+    add("chip <=", o.maxChip, Dimension::Length);
+    add("peak force <=", o.maxForce, Dimension::Force);
+    add("torque <=", o.maxTorque, Dimension::Torque);
+    add("power <=", o.maxPower, Dimension::Power);
   }
   if (job.scheduling())
     appendf(

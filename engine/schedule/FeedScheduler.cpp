@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 namespace engage {
@@ -198,6 +199,14 @@ const char* bindingName(Binding b) {
       return "no_target";
     case Binding::Fixed:
       return "fixed";
+    case Binding::Chip:
+      return "chip";
+    case Binding::Force:
+      return "force";
+    case Binding::Torque:
+      return "torque";
+    case Binding::Power:
+      return "power";
   }
   return "none";
 }
@@ -260,10 +269,17 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   }
   for (const auto& [tool, target] : out.targets)
     if (target > 0.0 && !(out.targetMrr > 0.0)) out.targetMrr = target;
-  if (!(out.targetMrr > 0.0))
+  if (o.physicsLimits() && sim.loads.size() != st.size())
+    throw ParameterError("--max-chip, --max-force, --max-torque and --max-power need --material");
+  if (!o.mrrTarget) {
+    out.targetMrr = 0.0;
+    for (auto& [tool, target] : out.targets)
+      target = 0.0;
+  } else if (!(out.targetMrr > 0.0)) {
     throw ParameterError(
         "--target-mrr auto needs steady straight cutting steps; this program has none: give a "
         "target");
+  }
   double programmedMax = 0.0;
   for (const StepRecord& s : st)
     programmedMax = std::max(programmedMax, s.feed);
@@ -289,18 +305,46 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
       continue;
     }
     const double target = out.targets[s.tool];
-    if (!(target > 0.0)) {
+    const bool physics = o.physicsLimits();
+    if (!(target > 0.0) && (o.mrrTarget || !physics)) {
       out.wanted[i] = std::clamp(s.feed, fMin, fMax);
       out.binding[i] = Binding::NoTarget;
       continue;
     }
     const double mrr = load(s);
-    if (mrr < kAirShare * target) {
+    const bool air = target > 0.0 ? mrr < kAirShare * target
+                                  : !(sim.loads[i].hMax > 0.0) && !std::isnan(sim.loads[i].hMax);
+    if (air) {
       out.wanted[i] = std::clamp(o.airFeed > 0.0 ? o.airFeed : s.feed, fMin, fMax);
       out.binding[i] = Binding::Air;
       continue;
     }
-    double f = s.feed * target / mrr;
+    double f = target > 0.0 ? s.feed * target / mrr : std::numeric_limits<double>::infinity();
+    if (physics) {
+      // The feed each limit allows: the chip grows as the feed, torque and power as
+      // T_cut s^p + T_edge, the peak force as its kept values (CuttingForces.h).
+      const StepLoad& l = sim.loads[i];
+      auto lower = [&](double scale, Binding b) {
+        if (s.feed * scale < f) {
+          f = s.feed * scale;
+          out.binding[i] = b;
+        }
+      };
+      if (std::isnan(l.hMax)) {
+        // No load model (a plunge, a stopped spindle): the programmed feed, or lower.
+        lower(1.0, Binding::NoTarget);
+      } else {
+        if (o.maxChip > 0.0 && l.hMax > 0.0) lower(o.maxChip / l.hMax, Binding::Chip);
+        if (o.maxForce > 0.0) lower(scaleForPeak(l, o.maxForce), Binding::Force);
+        if (o.maxTorque > 0.0) lower(scaleForTorque(l, o.maxTorque), Binding::Torque);
+        if (o.maxPower > 0.0 && l.torque > 0.0)
+          lower(scaleForTorque(l, o.maxPower * l.torque / l.power), Binding::Power);
+      }
+      if (!std::isfinite(f)) {  // no limit binds (edge forces alone): as fast as allowed
+        f = fMax;
+        out.binding[i] = Binding::FeedMax;
+      }
+    }
     // Plunges (no horizontal motion) load the cutter's end, not its flank: never faster
     // than programmed.
     const Move& m = path.moves[s.move];
@@ -353,7 +397,10 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
       if (out.feed == before) break;
     }
   for (std::size_t i = 0; i < st.size(); ++i)
-    if (isFeedStep(st[i]) && out.binding[i] == Binding::None &&
+    if (isFeedStep(st[i]) &&
+        (out.binding[i] == Binding::None || out.binding[i] == Binding::Chip ||
+         out.binding[i] == Binding::Force || out.binding[i] == Binding::Torque ||
+         out.binding[i] == Binding::Power) &&
         out.feed[i] < out.wanted[i] / (1.0 + o.minChange) - 1e-9)
       out.binding[i] = Binding::Acceleration;
 

@@ -41,6 +41,16 @@ struct ScheduleOptions {
   /// Schedule from the analytic model of each step (paper Eq 21-23 through its MRR, with the
   /// step's curvature and the simulation's stepover/depth) instead of the measured MRR.
   bool analytic = false;
+  /// Hold an MRR target at all (targetMrr, targetByTool, or auto). Off when only the limits
+  /// below are given: then each step runs at the feed the lowest of them allows.
+  bool mrrTarget = true;
+  /// Limits from the cutting physics of each step (SimulationResult::loads; 0: none): the
+  /// largest chip thickness h_max (mm), peak resultant force (N), spindle torque (N*m) and
+  /// power (W). Any combination; the lowest feed wins.
+  double maxChip = 0.0, maxForce = 0.0, maxTorque = 0.0, maxPower = 0.0;
+  bool physicsLimits() const {
+    return maxChip > 0.0 || maxForce > 0.0 || maxTorque > 0.0 || maxPower > 0.0;
+  }
 };
 
 /// The MRR that keeps the tangential cutting force at `force` (N), paper Eq 17-18 inverted:
@@ -51,8 +61,23 @@ double mrrForForce(double force, double specificEnergy, double diameter, double 
 /// What keeps a step's feed from the one that meets the target. Fixed: spindle-synchronised
 /// or probing moves, whose feed the controller sets (Move::fixedFeed()).
 /// NoTarget: a tool of a multi-tool program with no steady straight steps to take an auto
-/// target from (a drill): its steps keep their programmed feeds.
-enum class Binding { None, FeedMin, FeedMax, Acceleration, Air, Plunge, Fixed, NoTarget };
+/// target from (a drill): its steps keep their programmed feeds. Chip, Force, Torque, Power:
+/// that physics limit (ScheduleOptions::maxChip ...) allows less than the MRR target (or, with
+/// no MRR target, less than the other limits).
+enum class Binding {
+  None,
+  FeedMin,
+  FeedMax,
+  Acceleration,
+  Air,
+  Plunge,
+  Fixed,
+  NoTarget,
+  Chip,
+  Force,
+  Torque,
+  Power
+};
 
 /// The result: per-step feeds and the plan for the writer.
 struct Schedule {

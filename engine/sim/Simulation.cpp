@@ -200,6 +200,37 @@ void addCollision(std::vector<Collision>& list, const Collision& c) {
   list.push_back(c);
 }
 
+/// The load of one step (engine/physics) at its programmed feed.
+StepLoad stepLoad(const PhysicsOptions& o, const Move& m, const StepPath& sp, const StepRecord& r,
+                  const Removal& rem, const AptCutter& cutter, const Stock& stock,
+                  SimulationResult& out) {
+  StepLoad load;
+  load.exponent = o.material.exponent();
+  load.entry = load.exit = kNaN;
+  const double h = stock.resolution();
+  if (m.kind == MoveKind::Rapid || !(r.removed > kAirVoxels * h * h * h)) return load;
+  // The direction at the step's end, and how much of it is horizontal.
+  const Eigen::Vector3d d = sp.end - sp.at(std::max(0.0, 1.0 - 1e-3));
+  const double horizontal = d.norm() > 0.0 ? d.head<2>().norm() / d.norm() : 0.0;
+  const double rpm = m.spindleRpm != 0.0 ? m.spindleRpm : o.spindleRpm;
+  auto unmodelled = [&](std::size_t& count) {
+    ++count;
+    StepLoad nan;
+    nan.entry = nan.exit = nan.hMax = nan.hMean = nan.peak = nan.torque = nan.power = kNaN;
+    nan.force = Eigen::Vector3d::Constant(kNaN);
+    nan.torqueCut = nan.torqueEdge = kNaN;
+    nan.peakAt.fill(kNaN);
+    return nan;
+  };
+  if (horizontal < 1e-3) return unmodelled(out.plungeSteps);
+  if (rpm == 0.0) return unmodelled(out.stoppedSteps);
+  const EdgeEngagement e = measureEngagement(stock, cutter, sp.end, d.head<2>(), rpm > 0.0,
+                                             std::min(cutter.height(), rem.top + h));
+  const int flutes = cutter.fluteCount();
+  const double fz = r.feed / (std::abs(rpm) * flutes) * horizontal;
+  return cuttingLoad(e, o.material, {flutes, o.helix, cutter.maxRadius()}, fz, rpm);
+}
+
 }  // namespace
 
 SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock& stock,
@@ -281,6 +312,9 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
     // Side of the curve the stock is on: concave when it lies on the outer side.
     if (r.curvature != 0.0 && r.removed > kAirVoxels * h * h * h)
       r.side = r.curvature * rem.lateral < 0.0 ? PathSide::Concave : PathSide::Convex;
+
+    if (options.physics)
+      out.loads.push_back(stepLoad(*options.physics, m, sp, r, rem, cutter, stock, out));
 
     // The analytic model of this step: its stepover and depth (given or measured).
     r.mrrExact = r.mrrPaper = 0.0;

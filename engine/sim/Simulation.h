@@ -7,6 +7,8 @@
 #include "cutters/AptCutter.h"
 #include "engine/gcode/Toolpath.h"
 #include "engine/model/EngagementModel.h"
+#include "engine/physics/CuttingForces.h"
+#include "engine/physics/Material.h"
 #include "stock/Stock.h"
 
 #include <functional>
@@ -16,6 +18,14 @@
 #include <vector>
 
 namespace engage {
+
+/// Cutting physics per step (engine/physics): what the material and the teeth are.
+struct PhysicsOptions {
+  Material material;
+  double helix = 0.5235987755982988;  ///< the flutes' helix angle, rad (30 deg)
+  /// Spindle speed, rpm, for moves where the program's spindle is stopped or has no S (+: M3).
+  double spindleRpm = 0.0;
+};
 
 /// Settings of one simulation.
 struct SimulationOptions {
@@ -32,6 +42,9 @@ struct SimulationOptions {
   /// Record each step's removal time in SimulationResult::stepSeconds (benchmarks; kept out
   /// of the reports, which must not change from run to run).
   bool timeSteps = false;
+  /// Measure each cutting step's edge contact and compute its chip, forces, torque and
+  /// power (SimulationResult::loads).
+  std::optional<PhysicsOptions> physics;
 };
 
 /// The cutters of a run: the cutter of each tool number the moves name (Move::tool), and the
@@ -127,6 +140,12 @@ struct SimulationResult {
   Agreement straightPaper, concavePaper, convexPaper;
   std::vector<Difference> largest;  ///< the steady-state steps that differ most (exact form)
   std::vector<double> stepSeconds;  ///< per step, when SimulationOptions::timeSteps
+  /// Per step, with SimulationOptions::physics: the load at the programmed feed (zero for
+  /// rapids and air; NaN where the model does not apply: plunges, which load the end face,
+  /// and cuts with the spindle stopped).
+  std::vector<StepLoad> loads;
+  std::size_t plungeSteps = 0;   ///< cutting steps without horizontal motion (no load model)
+  std::size_t stoppedSteps = 0;  ///< cutting steps with no spindle speed (no load model)
 };
 
 /// Check that cutting `path` into steps no longer than `stepLength` (mm) makes at most

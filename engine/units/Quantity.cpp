@@ -92,6 +92,15 @@ const std::vector<Unit>& unitsOf(Dimension dim) {
       {"n", 1.0, kM}, {"kn", 1000.0, kM}, {"lbf", kPoundForce, kI}};
   static const std::vector<Unit> time{
       {"s", 1.0, kNone}, {"ms", 1e-3, kNone}, {"min", 60.0, kNone}, {"h", 3600.0, kNone}};
+  static const std::vector<Unit> torque{{"nm", 1.0, kM},
+                                        {"n*m", 1.0, kM},
+                                        {"n.m", 1.0, kM},
+                                        {"lbf*ft", kPoundForce * 0.3048, kI},
+                                        {"lbfft", kPoundForce * 0.3048, kI},
+                                        {"ft*lbf", kPoundForce * 0.3048, kI},
+                                        {"lbf*in", kPoundForce * 0.0254, kI},
+                                        {"in*lbf", kPoundForce * 0.0254, kI}};
+  static const std::vector<Unit> power{{"w", 1.0, kM}, {"kw", 1000.0, kM}, {"hp", kHorsepower, kI}};
   switch (dim) {
     case Dimension::Length:
       return length;
@@ -119,6 +128,10 @@ const std::vector<Unit>& unitsOf(Dimension dim) {
       return force;
     case Dimension::Time:
       return time;
+    case Dimension::Torque:
+      return torque;
+    case Dimension::Power:
+      return power;
   }
   return length;
 }
@@ -178,6 +191,15 @@ const Display& displayOf(Dimension dim) {
   static const Display force{
       "N", "N", 1.0, "lbf", "lbf", kPoundForce, "a force such as 400N or 90lbf"};
   static const Display time{"s", "s", 1.0, "s", "s", 1.0, "a time such as 2s or 1.5min"};
+  static const Display torque{"N*m",
+                              "Nm",
+                              1.0,
+                              "lbf*ft",
+                              "lbf_ft",
+                              kPoundForce * 0.3048,
+                              "a torque such as 12Nm or 9lbf*ft"};
+  static const Display power{
+      "kW", "kW", 1000.0, "hp", "hp", kHorsepower, "a power such as 5.5kW or 7.5hp"};
   switch (dim) {
     case Dimension::Length:
       return length;
@@ -205,6 +227,10 @@ const Display& displayOf(Dimension dim) {
       return force;
     case Dimension::Time:
       return time;
+    case Dimension::Torque:
+      return torque;
+    case Dimension::Power:
+      return power;
   }
   return length;
 }

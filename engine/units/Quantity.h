@@ -1,8 +1,8 @@
 #pragma once
 /// \file Quantity.h
 /// The one parser and formatter of physical quantities for the whole command line and the
-/// reports. Internal units: mm, rad, mm/min, mm^3/min, mm/s^2, rev/min, J/mm^3, N, mm^2,
-/// mm^3, s. Inputs carry unit suffixes ("12mm", "0.5in", "100ipm", "30deg", "0.3g",
+/// reports. Internal units: mm, rad, mm/min, mm^3/min, mm/s^2, rev/min, J/mm^3, N, N*m, W,
+/// mm^2, mm^3, s. Inputs carry unit suffixes ("12mm", "0.5in", "100ipm", "30deg", "0.3g",
 /// "18000mm3/min", "1.1in3/min", "2000mm/s2", "7.27in/s2"); a bare number is read in the
 /// caller's default system (mm or inch based, degrees for angles, rpm for spindle speed).
 
@@ -32,6 +32,8 @@ enum class Dimension {
   SpecificEnergy,  ///< J/mm^3 | hp*min/in^3; internal J/mm^3
   Force,           ///< N | lbf; internal N
   Time,            ///< s (both systems)
+  Torque,          ///< N*m | lbf*ft; internal N*m
+  Power,           ///< kW | hp; internal W
 };
 
 /// A quantity or unit that cannot be read. The message names the option when one was given.
