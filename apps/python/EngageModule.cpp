@@ -95,6 +95,21 @@ py::dict stepColumns(const RunResult& r) {
     d["acceleration_mm_s2"] =
         column<double>(n, [&](std::size_t i) { return scheduledAcceleration(r, i); });
   }
+  if (!r.sim.loads.empty()) {
+    // Cutting physics (engine/physics): immersion angles in rad as the model uses them
+    // (0 on the side a tooth enters the front half, pi/2 straight ahead), internal units.
+    const auto& l = r.sim.loads;
+    d["entry_rad"] = column<double>(n, [&](std::size_t i) { return l[i].entry; });
+    d["exit_rad"] = column<double>(n, [&](std::size_t i) { return l[i].exit; });
+    d["h_max_mm"] = column<double>(n, [&](std::size_t i) { return l[i].hMax; });
+    d["h_mean_mm"] = column<double>(n, [&](std::size_t i) { return l[i].hMean; });
+    d["fx_N"] = column<double>(n, [&](std::size_t i) { return l[i].force.x(); });
+    d["fy_N"] = column<double>(n, [&](std::size_t i) { return l[i].force.y(); });
+    d["fz_N"] = column<double>(n, [&](std::size_t i) { return l[i].force.z(); });
+    d["f_peak_N"] = column<double>(n, [&](std::size_t i) { return l[i].peak; });
+    d["torque_Nm"] = column<double>(n, [&](std::size_t i) { return l[i].torque; });
+    d["power_W"] = column<double>(n, [&](std::size_t i) { return l[i].power; });
+  }
   if (r.crossChecked) {
     d[py::str("removed_" + std::string(stockModelName(r.job.otherModel())) + "_mm3")] =
         column<double>(n, [&](std::size_t i) { return r.cross.other.steps[i].removed; });

@@ -53,12 +53,14 @@ std::vector<std::string> bundledMaterials() {
   return names;
 }
 
+bool materialIsFile(const std::string& nameOrPath) {
+  return nameOrPath.find('/') != std::string::npos ||
+         (nameOrPath.size() > 5 && nameOrPath.substr(nameOrPath.size() - 5) == ".json");
+}
+
 Material readMaterial(const std::string& nameOrPath, const std::string& model) {
   std::string path = nameOrPath;
-  const bool isPath =
-      nameOrPath.find('/') != std::string::npos ||
-      (nameOrPath.size() > 5 && nameOrPath.substr(nameOrPath.size() - 5) == ".json");
-  if (!isPath) {
+  if (!materialIsFile(nameOrPath)) {
     path = materialFolder() + "/" + nameOrPath + ".json";
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) {

@@ -58,6 +58,10 @@ std::string materialFolder();
 /// The names of the bundled materials (their file names without .json), sorted.
 std::vector<std::string> bundledMaterials();
 
+/// Whether `nameOrPath` names a file (it has a / or ends in .json) rather than a bundled
+/// material.
+bool materialIsFile(const std::string& nameOrPath);
+
 /// Read `nameOrPath`: a file (any name with a / or ending in .json), else a bundled
 /// material's name. `model` "" keeps the file's choice, "linear" or "kienzle" forces one.
 /// Throws ParameterError naming the file and the field: an unknown name (listing the

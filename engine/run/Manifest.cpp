@@ -1,5 +1,7 @@
 #include "engine/run/Manifest.h"
 
+#include "engine/physics/Material.h"
+
 #include "cutters/Error.h"
 #include "engine/run/Output.h"
 
@@ -61,7 +63,14 @@ std::string contentHash(const std::string& path) {
 
 /// The options that name files: relative to the manifest, and their content part of the job
 /// (a FreeCAD .fctl's bits are not: an edited bit alone does not re-run its jobs).
-constexpr const char* kFileKeys[] = {"program", "stock", "tool-table", "tools"};
+constexpr const char* kFileKeys[] = {"program", "stock", "tool-table", "tools", "material"};
+
+/// A value of `key` that is not a file: a stock box, a bundled material's name.
+bool notAFile(const std::string& key, const std::string& v) {
+  if (key == "stock") return v.rfind("box:", 0) == 0;
+  if (key == "material") return !materialIsFile(v);
+  return false;
+}
 
 /// One job of the manifest, checked and with its files resolved against `base`.
 ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs::path& base,
@@ -81,7 +90,7 @@ ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs
   auto resolve = [&](const char* key) {
     if (!spec.contains(key)) return;
     const std::string v = text(spec[key]);
-    if (std::string(key) == "stock" && v.rfind("box:", 0) == 0) return;
+    if (notAFile(key, v)) return;
     if (fs::path(v).is_relative()) spec[key] = (base / v).lexically_normal().string();
   };
   for (const char* key : kFileKeys)
@@ -102,10 +111,13 @@ ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs
   json content = json::object();
   for (const char* key : kFileKeys) {
     if (!job.values.count(key) ||
-        (std::string(key) == "stock" && job.values.at(key).rfind("box:", 0) == 0))
+        (std::string(key) == "stock" && notAFile(key, job.values.at(key))))
       continue;
-    // Many jobs of a large batch share one program: each file is read and hashed once.
-    const std::string& file = job.values.at(key);
+    // Many jobs of a large batch share one program: each file is read and hashed once. A
+    // bundled material by its file.
+    const std::string file = notAFile(key, job.values.at(key))
+                                 ? materialFolder() + "/" + job.values.at(key) + ".json"
+                                 : job.values.at(key);
     auto it = hashes.find(file);
     if (it == hashes.end()) it = hashes.emplace(file, contentHash(file)).first;
     content[key] = it->second;

@@ -386,9 +386,11 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   // motion limit (and the two can settle on lifting and lowering the same feed); so a second
   // loop repeats the same steps without hysteresis: there every step only lowers feeds, the
   // levels are discrete, and it ends with every limit met.
+  // Physics limits are maxima, not targets: no level may lift a feed above what they allow,
+  // so the hysteresis pass is left out.
   out.feed = out.wanted;
   for (const bool hysteresis : {true, false})
-    for (int round = 0; round < 50 || !hysteresis; ++round) {
+    for (int round = 0; (round < 50 && !o.physicsLimits()) || !hysteresis; ++round) {
       const std::vector<double> before = out.feed;
       limitMotion(sim, out.feed, o.acceleration, o.jerk);
       quantizeDown(sim, out.feed, fMin, o.minChange, hysteresis);

@@ -89,6 +89,28 @@ def test_a_program_of_three_tools_from_a_library():
     assert r.summary["tool_library"]["format"] == "linuxcnc"
 
 
+def test_cutting_physics_of_a_slot(slot):
+    r = engage.run(program=slot, tool="flat", diameter=6, flutes=3, stock=BOX,
+                   stock_model="dexel", material="aluminium-7075-t6", spindle="10000rpm",
+                   helix="0deg")
+    steps = r.steps
+    mid = (steps["x_mm"] > 10) & (steps["x_mm"] < 20) & (steps["kind"] == "line")
+    assert mid.sum() > 10
+    # A slot, 2 mm deep, f_z = 600 / (10000 * 3) = 0.02 mm, Al 7075-T6's coefficients
+    # (data/materials): the textbook mean forces (Altintas Eq 2.40 from 0 to pi):
+    # F_feed = -N a (Krc c / 4 + Kre / pi), torque = N a R (2 Ktc c + pi Kte) / (2 pi).
+    N, a, c, R = 3, 2.0, 0.02, 3.0
+    Ktc, Krc, Kte, Kre = 767.01, 168.8, 27.7, 26.6
+    # The slot's sides are found to 2.5 deg at the default 0.3 mm rays; the depth to a
+    # slice: 3 % on the forces.
+    assert np.allclose(steps["fx_N"][mid], -N * a * (Krc * c / 4 + Kre / math.pi), rtol=0.03)
+    torque = N * a * R * (2 * Ktc * c + math.pi * Kte) / (2 * math.pi) / 1000
+    assert np.allclose(steps["torque_Nm"][mid], torque, rtol=0.03)
+    assert np.allclose(steps["power_W"][mid], torque * 2 * math.pi * 10000 / 60, rtol=0.03)
+    assert np.allclose(steps["h_max_mm"][mid], c, rtol=1e-6)
+    assert r.summary["physics"]["material"] == "Aluminium 7075-T6"
+
+
 def test_schedule_and_cross_check(slot):
     r = engage.run("schedule", program=slot, tool="flat", diameter=6, stock=BOX,
                    target_mrr="3600mm3/min", cross_check=True)
