@@ -435,6 +435,8 @@ Job makeJob(JobCommand command, const OptionValues& values) {
     for (const char* name : {"force-model", "helix"})
       if (!text(name).empty())
         throw ParameterError(std::string("--") + name + " applies with --material");
+    if (!text("spindle").empty() && text("force-limit").empty())
+      throw ParameterError("--spindle applies with --material or --force-limit");
   }
   const bool analytic = job.scheduling() && text("model") == "analytic";
   job.materialSide = text("material-side");
