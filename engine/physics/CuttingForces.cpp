@@ -82,6 +82,16 @@ bool engaged(const EdgeSlice& s, double phi) {
 
 }  // namespace
 
+StepLoad unmodelledLoad() {
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  StepLoad l;
+  l.entry = l.exit = l.hMax = l.hMean = l.peak = l.torque = l.power = nan;
+  l.torqueCut = l.torqueEdge = nan;
+  l.force = Eigen::Vector3d::Constant(nan);
+  l.peakAt.fill(nan);
+  return l;
+}
+
 StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Teeth& teeth,
                      double fz, double rpm) {
   StepLoad out;

@@ -56,6 +56,9 @@ struct StepLoad {
   std::array<double, kPeakScales.size()> peakAt{};
 };
 
+/// The load of a step the model does not cover (a plunge, a stopped spindle): every value NaN.
+StepLoad unmodelledLoad();
+
 /// The load of a step with contact `e` cutting `material` with `teeth` at feed per tooth
 /// `fz` (mm, horizontal) and spindle speed `rpm` (its magnitude). No contact: all zero.
 StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Teeth& teeth,

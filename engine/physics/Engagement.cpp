@@ -94,17 +94,16 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
   // boundary lies about as far again: the true one is 2 phi(eps) - phi(2 eps). The second is
   // looked for up to 10 degrees on the air side; where it is not there (a wall met at a steep
   // angle, where both coincide, or a grazing contact) the first stays.
-  std::vector<Edge> far;
-  std::vector<std::size_t> farOf;
+  std::vector<double> boundary(edges.size());
+  std::vector<Edge> far;  // far[i]: where edges[i] is looked for again, 2 eps out
   for (std::size_t i = 0; i < edges.size(); ++i) {
     const Edge& e = edges[i];
-    const double at = 0.5 * (e.lo + e.hi);
+    const double at = boundary[i] = 0.5 * (e.lo + e.hi);
     // In contact on the low side: the air lies at higher angles.
     if (e.loIn)
       far.push_back({e.slice, at, std::min(kPi, at + kReach), true});
     else
       far.push_back({e.slice, std::max(0.0, at - kReach), at, false});
-    farOf.push_back(i);
   }
   // Keep only those whose bracket holds the change (contact at the near end, air at the far).
   points.clear();
@@ -114,16 +113,13 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
   }
   const std::vector<double> ends = stock.materialAt(points);
   std::vector<Edge> bracketed;
-  std::vector<std::size_t> bracketOf;
+  std::vector<std::size_t> bracketOf;  // the index in edges
   for (std::size_t i = 0; i < far.size(); ++i)
     if ((ends[2 * i] > 0.5) == far[i].loIn && (ends[2 * i + 1] > 0.5) != far[i].loIn) {
       bracketed.push_back(far[i]);
-      bracketOf.push_back(farOf[i]);
+      bracketOf.push_back(i);
     }
   refine(bracketed, 2.0 * eps, kRefinements + 2);
-  std::vector<double> boundary(edges.size());
-  for (std::size_t i = 0; i < edges.size(); ++i)
-    boundary[i] = 0.5 * (edges[i].lo + edges[i].hi);
   for (std::size_t i = 0; i < bracketed.size(); ++i) {
     const double near = boundary[bracketOf[i]];
     const double second = 0.5 * (bracketed[i].lo + bracketed[i].hi);

@@ -58,10 +58,13 @@ bool materialIsFile(const std::string& nameOrPath) {
          (nameOrPath.size() > 5 && nameOrPath.substr(nameOrPath.size() - 5) == ".json");
 }
 
+std::string materialFile(const std::string& nameOrPath) {
+  return materialIsFile(nameOrPath) ? nameOrPath : materialFolder() + "/" + nameOrPath + ".json";
+}
+
 Material readMaterial(const std::string& nameOrPath, const std::string& model) {
-  std::string path = nameOrPath;
+  const std::string path = materialFile(nameOrPath);
   if (!materialIsFile(nameOrPath)) {
-    path = materialFolder() + "/" + nameOrPath + ".json";
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) {
       std::string list;

@@ -62,6 +62,10 @@ std::vector<std::string> bundledMaterials();
 /// material.
 bool materialIsFile(const std::string& nameOrPath);
 
+/// The file of `nameOrPath`: itself when it names a file, else the bundled material's file
+/// (which may not exist).
+std::string materialFile(const std::string& nameOrPath);
+
 /// Read `nameOrPath`: a file (any name with a / or ending in .json), else a bundled
 /// material's name. `model` "" keeps the file's choice, "linear" or "kienzle" forces one.
 /// Throws ParameterError naming the file and the field: an unknown name (listing the

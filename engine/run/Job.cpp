@@ -111,17 +111,19 @@ ScheduleOptions scheduleOptions(const OptionValues& values, UnitSystem sys, cons
     throw ParameterError("--min-change: expected a fraction in (0, 1), found " + change);
   s.minSegment = quantity("min-segment", Dimension::Length);
   s.analytic = text("model") == "analytic";
-  const std::pair<const char*, Dimension> limits[] = {{"max-chip", Dimension::Length},
-                                                      {"max-force", Dimension::Force},
-                                                      {"max-torque", Dimension::Torque},
-                                                      {"max-power", Dimension::Power}};
-  double* fields[] = {&s.maxChip, &s.maxForce, &s.maxTorque, &s.maxPower};
-  for (std::size_t k = 0; k < 4; ++k) {
-    const auto& [name, dimension] = limits[k];
-    *fields[k] = quantity(name, dimension);
-    if (!text(name).empty() && !(*fields[k] > 0.0))
-      throw ParameterError(std::string("--") + name + " must be positive, found '" + text(name) +
-                           "'");
+  const struct {
+    const char* name;
+    Dimension dimension;
+    double* field;
+  } limits[] = {{"max-chip", Dimension::Length, &s.maxChip},
+                {"max-force", Dimension::Force, &s.maxForce},
+                {"max-torque", Dimension::Torque, &s.maxTorque},
+                {"max-power", Dimension::Power, &s.maxPower}};
+  for (const auto& l : limits) {
+    *l.field = quantity(l.name, l.dimension);
+    if (!text(l.name).empty() && !(*l.field > 0.0))
+      throw ParameterError(std::string("--") + l.name + " must be positive, found '" +
+                           text(l.name) + "'");
   }
   if (s.physicsLimits()) {
     if (text("material").empty())

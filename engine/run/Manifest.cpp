@@ -115,9 +115,8 @@ ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs
       continue;
     // Many jobs of a large batch share one program: each file is read and hashed once. A
     // bundled material by its file.
-    const std::string file = notAFile(key, job.values.at(key))
-                                 ? materialFolder() + "/" + job.values.at(key) + ".json"
-                                 : job.values.at(key);
+    const std::string file =
+        std::string(key) == "material" ? materialFile(job.values.at(key)) : job.values.at(key);
     auto it = hashes.find(file);
     if (it == hashes.end()) it = hashes.emplace(file, contentHash(file)).first;
     content[key] = it->second;

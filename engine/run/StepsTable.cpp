@@ -15,6 +15,11 @@ const char* sideName(PathSide s) {
 
 }  // namespace
 
+double feedScale(const RunResult& result, std::size_t i) {
+  const double programmed = result.sim.steps[i].feed;
+  return programmed > 0.0 ? result.plan.feed[i] / programmed : 0.0;
+}
+
 double scheduledAcceleration(const RunResult& result, std::size_t i) {
   const auto& steps = result.sim.steps;
   if (i == 0 || steps[i].kind == MoveKind::Rapid || steps[i - 1].kind == MoveKind::Rapid)
@@ -56,26 +61,24 @@ std::string stepsTable(const RunResult& result) {
   const Schedule& plan = result.plan;
   for (std::size_t i = 0; i < steps.size(); ++i) {
     const StepRecord& s = steps[i];
-    csv +=
-        std::to_string(i) + "," + std::to_string(s.move) + "," + std::to_string(s.line) + "," +
-        std::to_string(s.tool) + "," + moveKindName(s.kind) + "," +
-        D(s.arcLength, Dimension::Length) + "," + D(s.end.x(), Dimension::Length) + "," +
-        D(s.end.y(), Dimension::Length) + "," + D(s.end.z(), Dimension::Length) + "," +
-        D(s.feed, Dimension::Feed) + "," + formatNumber(s.dt) + "," +
-        D(s.removed, Dimension::Volume) + "," + D(s.mrr, Dimension::VolumeRate) + "," +
-        D(s.width, Dimension::Length) + "," + D(s.depth, Dimension::Length) + "," +
-        formatNumber(s.engagementRad * kDegree) + "," +
-        formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," + sideName(s.side) +
-        "," + D(s.mrrExact, Dimension::VolumeRate) + "," + D(s.mrrPaper, Dimension::VolumeRate) +
-        "," + std::to_string(s.voxelsChanged) +
-        (schedule
-             ? "," + D(plan.feed[i], Dimension::Feed) + "," + bindingName(plan.binding[i]) + "," +
-                   D(s.feed > 0 ? s.mrr * plan.feed[i] / s.feed : 0.0, Dimension::VolumeRate) +
-                   "," + D(scheduledAcceleration(result, i), Dimension::Acceleration)
-             : std::string()) +
-        (cross ? "," + D(result.cross.other.steps[i].removed, Dimension::Volume) +
-                     (result.cross.differs[i] ? ",differs" : ",agrees")
-               : std::string());
+    csv += std::to_string(i) + "," + std::to_string(s.move) + "," + std::to_string(s.line) + "," +
+           std::to_string(s.tool) + "," + moveKindName(s.kind) + "," +
+           D(s.arcLength, Dimension::Length) + "," + D(s.end.x(), Dimension::Length) + "," +
+           D(s.end.y(), Dimension::Length) + "," + D(s.end.z(), Dimension::Length) + "," +
+           D(s.feed, Dimension::Feed) + "," + formatNumber(s.dt) + "," +
+           D(s.removed, Dimension::Volume) + "," + D(s.mrr, Dimension::VolumeRate) + "," +
+           D(s.width, Dimension::Length) + "," + D(s.depth, Dimension::Length) + "," +
+           formatNumber(s.engagementRad * kDegree) + "," +
+           formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," +
+           sideName(s.side) + "," + D(s.mrrExact, Dimension::VolumeRate) + "," +
+           D(s.mrrPaper, Dimension::VolumeRate) + "," + std::to_string(s.voxelsChanged) +
+           (schedule ? "," + D(plan.feed[i], Dimension::Feed) + "," + bindingName(plan.binding[i]) +
+                           "," + D(s.mrr * feedScale(result, i), Dimension::VolumeRate) + "," +
+                           D(scheduledAcceleration(result, i), Dimension::Acceleration)
+                     : std::string()) +
+           (cross ? "," + D(result.cross.other.steps[i].removed, Dimension::Volume) +
+                        (result.cross.differs[i] ? ",differs" : ",agrees")
+                  : std::string());
     if (physics) {
       // Angles from the feed direction, in the direction of rotation (slot: -90 to 90).
       const StepLoad& l = result.sim.loads[i];
@@ -86,7 +89,7 @@ std::string stepsTable(const RunResult& result) {
              D(l.peak, Dimension::Force) + "," + D(l.torque, Dimension::Torque) + "," +
              D(l.power, Dimension::Power);
       if (schedule) {
-        const ScaledLoad a = scaleLoad(l, s.feed > 0.0 ? plan.feed[i] / s.feed : 0.0);
+        const ScaledLoad a = scaleLoad(l, feedScale(result, i));
         csv += "," + D(a.hMax, Dimension::Length) + "," + D(a.peak, Dimension::Force) + "," +
                D(a.torque, Dimension::Torque) + "," + D(a.power, Dimension::Power);
       }

@@ -14,6 +14,10 @@ namespace engage {
 /// The table's text (header and rows).
 std::string stepsTable(const RunResult& result);
 
+/// Step i's scheduled feed over its programmed one (0 for rapids): the MRR and the chip
+/// scale with it.
+double feedScale(const RunResult& result, std::size_t i);
+
 /// Eq 24's tangential acceleration between step i-1 and step i with the scheduled feeds,
 /// mm/s^2 (0 at the first step and next to rapids).
 double scheduledAcceleration(const RunResult& result, std::size_t i);

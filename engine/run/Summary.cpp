@@ -1,6 +1,7 @@
 #include "engine/run/Summary.h"
 
 #include "engine/run/CutterOptions.h"
+#include "engine/run/StepsTable.h"
 #include "engine/units/Quantity.h"
 
 #include <nlohmann/json.hpp>
@@ -85,7 +86,7 @@ ordered_json scheduleJson(const RunResult& result) {
     const double load = result.stock ? s.mrr : s.mrrExact;
     if (s.kind == MoveKind::Rapid || !(load > 0.0) || plan.binding[i] == Binding::Air) continue;
     // The removal per unit length does not depend on the feed: the MRR scales with it.
-    const double after = load * plan.feed[i] / s.feed;
+    const double after = load * feedScale(result, i);
     mrrBefore += load;
     meanAfter += after;
     peakBefore = std::max(peakBefore, load);
@@ -132,9 +133,8 @@ PhysicsPeaks physicsPeaks(const RunResult& result, bool scheduled) {
   PhysicsPeaks p;
   const auto& loads = result.sim.loads;
   for (std::size_t i = 0; i < loads.size(); ++i) {
-    const StepRecord& s = result.sim.steps[i];
     ScaledLoad a{loads[i].hMax, loads[i].peak, loads[i].torque, loads[i].power};
-    if (scheduled) a = scaleLoad(loads[i], s.feed > 0.0 ? result.plan.feed[i] / s.feed : 0.0);
+    if (scheduled) a = scaleLoad(loads[i], feedScale(result, i));
     const double v[4] = {a.hMax, a.peak, a.torque, a.power};
     for (int k = 0; k < 4; ++k)
       if (v[k] > p.value[k]) {  // NaN (no model) never wins

@@ -12,6 +12,11 @@
 namespace engage {
 namespace {
 
+/// A binding that says which physics limit set the wanted feed.
+bool physicsBinding(Binding b) {
+  return b == Binding::Chip || b == Binding::Force || b == Binding::Torque || b == Binding::Power;
+}
+
 /// Steps whose MRR is below this share of the target cut air.
 constexpr double kAirShare = 0.01;
 
@@ -293,6 +298,7 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   if (o.jerk < 0.0 || o.acceleration < 0.0)
     throw ParameterError("--accel and --jerk must not be negative");
 
+  const bool physics = o.physicsLimits();
   out.wanted.assign(st.size(), 0.0);
   out.binding.assign(st.size(), Binding::None);
   for (std::size_t i = 0; i < st.size(); ++i) {
@@ -305,7 +311,6 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
       continue;
     }
     const double target = out.targets[s.tool];
-    const bool physics = o.physicsLimits();
     if (!(target > 0.0) && (o.mrrTarget || !physics)) {
       out.wanted[i] = std::clamp(s.feed, fMin, fMax);
       out.binding[i] = Binding::NoTarget;
@@ -390,7 +395,7 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   // so the hysteresis pass is left out.
   out.feed = out.wanted;
   for (const bool hysteresis : {true, false})
-    for (int round = 0; (round < 50 && !o.physicsLimits()) || !hysteresis; ++round) {
+    for (int round = 0; (round < 50 && !physics) || !hysteresis; ++round) {
       const std::vector<double> before = out.feed;
       limitMotion(sim, out.feed, o.acceleration, o.jerk);
       quantizeDown(sim, out.feed, fMin, o.minChange, hysteresis);
@@ -399,10 +404,7 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
       if (out.feed == before) break;
     }
   for (std::size_t i = 0; i < st.size(); ++i)
-    if (isFeedStep(st[i]) &&
-        (out.binding[i] == Binding::None || out.binding[i] == Binding::Chip ||
-         out.binding[i] == Binding::Force || out.binding[i] == Binding::Torque ||
-         out.binding[i] == Binding::Power) &&
+    if (isFeedStep(st[i]) && (out.binding[i] == Binding::None || physicsBinding(out.binding[i])) &&
         out.feed[i] < out.wanted[i] / (1.0 + o.minChange) - 1e-9)
       out.binding[i] = Binding::Acceleration;
 

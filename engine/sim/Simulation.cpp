@@ -213,17 +213,10 @@ StepLoad stepLoad(const PhysicsOptions& o, const Move& m, const StepPath& sp, co
   const Eigen::Vector3d d = sp.end - sp.at(std::max(0.0, 1.0 - 1e-3));
   const double horizontal = d.norm() > 0.0 ? d.head<2>().norm() / d.norm() : 0.0;
   const double rpm = m.spindleRpm != 0.0 ? m.spindleRpm : o.spindleRpm;
-  auto unmodelled = [&](std::size_t& count) {
-    ++count;
-    StepLoad nan;
-    nan.entry = nan.exit = nan.hMax = nan.hMean = nan.peak = nan.torque = nan.power = kNaN;
-    nan.force = Eigen::Vector3d::Constant(kNaN);
-    nan.torqueCut = nan.torqueEdge = kNaN;
-    nan.peakAt.fill(kNaN);
-    return nan;
-  };
-  if (horizontal < 1e-3) return unmodelled(out.plungeSteps);
-  if (rpm == 0.0) return unmodelled(out.stoppedSteps);
+  if (horizontal < 1e-3 || rpm == 0.0) {
+    ++(horizontal < 1e-3 ? out.plungeSteps : out.stoppedSteps);
+    return unmodelledLoad();
+  }
   const EdgeEngagement e = measureEngagement(stock, cutter, sp.end, d.head<2>(), rpm > 0.0,
                                              std::min(cutter.height(), rem.top + h));
   const int flutes = cutter.fluteCount();
