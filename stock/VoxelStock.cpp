@@ -40,6 +40,7 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/ChangeBackground.h>
 #include <openvdb/tools/FastSweeping.h>
+#include <openvdb/tools/GridTransformer.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/MeshToVolume.h>
@@ -1189,11 +1190,15 @@ void VoxelStock::writeRemovedVdb(const std::string& path) const {
   writeVdb(path, openvdb::GridPtrVec{impl_->removed, impl_->step, impl_->mrr});
 }
 
-std::size_t VoxelStock::writeStl(const std::string& path) const {
+namespace {
+
+/// The 0.5 iso-surface of a fraction grid as a triangle mesh with outward normals; OpenVDB's
+/// `adaptivity` (0: none) merges cells where the surface is nearly flat.
+TriangleMesh isoSurface(const FloatGrid& grid, double adaptivity) {
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(*impl_->grid, points, triangles, quads, 0.5, 0.0);
+  openvdb::tools::volumeToMesh(grid, points, triangles, quads, 0.5, adaptivity);
   for (const auto& q : quads) {
     triangles.emplace_back(q[0], q[1], q[2]);
     triangles.emplace_back(q[0], q[2], q[3]);
@@ -1206,13 +1211,57 @@ std::size_t VoxelStock::writeStl(const std::string& path) const {
   }
   const bool flip = signedVolume < 0.0;
   TriangleMesh mesh;
+  mesh.points.reserve(points.size());
   for (const auto& p : points)
     mesh.points.push_back({p[0], p[1], p[2]});
+  mesh.triangles.reserve(triangles.size());
   for (const auto& t : triangles)
     mesh.triangles.push_back(flip ? std::array<unsigned, 3>{t[0], t[2], t[1]}
                                   : std::array<unsigned, 3>{t[0], t[1], t[2]});
+  return mesh;
+}
+
+}  // namespace
+
+std::size_t VoxelStock::writeStl(const std::string& path) const {
+  const TriangleMesh mesh = isoSurface(*impl_->grid, 0.0);
   engage::writeStl(mesh, path);
   return boundaryEdgeCount(mesh);
+}
+
+TriangleMesh VoxelStock::viewMesh(std::size_t maxTriangles, double* cellSize) const {
+  // About two triangles per partial voxel at full resolution, a quarter of that per halving.
+  std::size_t partial = 0;
+  for (auto leaf = impl_->grid->tree().cbeginLeaf(); leaf; ++leaf)
+    for (auto v = leaf->cbeginValueOn(); v; ++v)
+      if (*v > 0.0f && *v < 1.0f) ++partial;
+  int c = 1;
+  while (c < 64 && 2.0 * static_cast<double>(partial) / (c * c) > static_cast<double>(maxTriangles))
+    c *= 2;
+  const double h = impl_->h;
+  constexpr double kAdaptivity = 0.1;  // merges flat floors and walls, keeps edges
+  auto meshAt = [&](int factor) {
+    if (factor == 1) return isoSurface(*impl_->grid, kAdaptivity);
+    // Coarse voxel I covers fine voxels f I .. f I + f - 1: its centre is (f I + (f - 1) / 2) h.
+    FloatGrid::Ptr coarse = FloatGrid::create(0.0f);
+    openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(factor * h);
+    xf->postTranslate(openvdb::Vec3d(0.5 * (factor - 1) * h));
+    coarse->setTransform(xf);
+    openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*impl_->grid, *coarse);
+    return isoSurface(*coarse, kAdaptivity);
+  };
+  TriangleMesh mesh = meshAt(c);
+  // Adaptive meshing often leaves far fewer than the estimate: finer while it fits.
+  while (c > 1 && mesh.triangles.size() * 4 < maxTriangles) {
+    TriangleMesh finer = meshAt(c / 2);
+    if (finer.triangles.size() > maxTriangles) break;
+    mesh = std::move(finer);
+    c /= 2;
+  }
+  while (mesh.triangles.size() > maxTriangles && c < 64)
+    mesh = meshAt(c *= 2);
+  if (cellSize) *cellSize = c * h;
+  return mesh;
 }
 
 }  // namespace engage

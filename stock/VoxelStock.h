@@ -24,6 +24,7 @@
 #include "cutters/AptCutter.h"
 #include "cutters/Sweep.h"
 #include "stock/Stock.h"
+#include "stock/TriangleMesh.h"
 
 #include <memory>
 #include <string>
@@ -87,6 +88,12 @@ class VoxelStock : public Stock {
   /// Write the stock's surface (the 0.5 iso-surface of the fraction) as binary STL with
   /// outward normals; returns the number of boundary (unpaired) edges, 0 for a closed mesh.
   std::size_t writeStl(const std::string& path) const;
+  /// The stock's surface as writeStl's, for viewing, with at most about `maxTriangles`
+  /// triangles: when the stock's own grid would give more, the fractions are resampled
+  /// (trilinearly, by OpenVDB's resampleToMatch) on a grid 2, 4, 8, ... times coarser; nearly
+  /// flat cells are merged (OpenVDB's adaptive meshing). `cellSize` gets the cell of the grid
+  /// meshed, mm: the mesh lies within about one such cell of the stock's surface.
+  TriangleMesh viewMesh(std::size_t maxTriangles, double* cellSize = nullptr) const;
 
  private:
   struct Impl;

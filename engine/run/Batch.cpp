@@ -1,5 +1,7 @@
 #include "engine/run/Batch.h"
 
+#include "engine/report/HtmlPage.h"
+
 #include "cutters/Error.h"
 #include "engine/run/Job.h"
 #include "engine/run/Manifest.h"
@@ -157,6 +159,51 @@ Shard parseShard(const std::string& s) {
   }
 }
 
+/// report.html of a batch: one row per job (the merged records, then the jobs that have not
+/// run) with its status, figures in the batch's units, error, and a link to its own report.
+std::string batchReportHtml(const std::vector<ordered_json>& records,
+                            const std::vector<std::string>& missing, const fs::path& out,
+                            UnitSystem sys) {
+  auto display = [&](const ordered_json& v, Dimension d) {
+    return v.is_null() ? ordered_json() : ordered_json(toDisplay(v.get<double>(), d, sys));
+  };
+  ordered_json jobs = ordered_json::array();
+  for (const ordered_json& r : records) {
+    const std::string name = r["name"].get<std::string>();
+    const bool hasReport = fs::exists(out / "jobs" / name / "report.html");
+    jobs.push_back(
+        {{"name", name},
+         {"status", r["status"]},
+         {"program", r["program"]},
+         {"error", r["error"]},
+         {"warnings", r["warnings"]},
+         {"report", hasReport ? ordered_json("jobs/" + name + "/report.html") : ordered_json()},
+         {"figures",
+          {{"removed", display(r["removed_mm3"], Dimension::Volume)},
+           {"peak_mrr", display(r["peak_mrr_mm3_min"], Dimension::VolumeRate)},
+           {"peak_mrr_line", r["peak_mrr_line"]},
+           {"cutting_time_s", r["cutting_time_s"]},
+           {"feed_time_before_s", r["feed_time_before_s"]},
+           {"feed_time_after_s", r["feed_time_after_s"]},
+           {"collisions", r["collisions"]}}}});
+  }
+  for (const std::string& name : missing)
+    jobs.push_back({{"name", name}, {"status", "not run"}, {"error", nullptr}});
+  ordered_json data;
+  data["kind"] = "batch";
+  data["title"] = "engage batch: " + out.filename().string();
+  data["batch"] = {
+      {"subtitle", out.string() + " · " + std::to_string(records.size() + missing.size()) +
+                       " jobs · figures in " + std::string(systemName(sys))},
+      {"jobs", jobs},
+      {"units",
+       {{"volume", std::string(unitLabel(Dimension::Volume, sys))},
+        {"mrr", std::string(unitLabel(Dimension::VolumeRate, sys))}}},
+      {"files", {"batch.csv", "batch.json"}}};
+  return htmlPage(PageKind::Batch, data["title"].get<std::string>(),
+                  data.dump(-1, ' ', false, ordered_json::error_handler_t::replace));
+}
+
 std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& out, UnitSystem sys,
                          bool allowMissing = false) {
   const fs::path jobs = out / "jobs";
@@ -225,9 +272,10 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
   j["records"] = summary;
   writeAtomically(out / "batch.csv", csv);
   writeAtomically(out / "batch.json", j.dump(2) + "\n");
+  writeAtomically(out / "report.html", batchReportHtml(records, missing, out, sys));
   char line[256];
   std::snprintf(line, sizeof line,
-                "merged %zu jobs (%zu ok, %zu failed) into %s/batch.csv, batch.json\n",
+                "merged %zu jobs (%zu ok, %zu failed) into %s/batch.csv, batch.json, report.html\n",
                 records.size(), ok, records.size() - ok, out.string().c_str());
   std::string text = line;
   if (!missing.empty())

@@ -490,6 +490,7 @@ Job makeJob(JobCommand command, const OptionValues& values) {
                            job.mainProgram() + "' itself; give another --out folder");
   }
   job.quiet = text("quiet") == "true";
+  job.report = text("no-report") != "true";
   job.progressLabel = commandName(command);
   return job;
 }

@@ -66,10 +66,13 @@ struct Job {
   bool materialOnRight = true;
   std::string materialSide;  ///< as typed ("" = default right)
   std::string out = "out";   ///< output folder
-  /// Which files to write: all; tables (steps.csv, summary.json, the re-fed program); summary
+  /// Which files to write: all; tables (steps.csv, summary.json, the re-fed program,
+  /// report.html without 3D view); summary
   /// (summary.json, the re-fed program): a batch of ten thousand programs fits a quota.
   enum class Outputs { All, Tables, Summary } outputs = Outputs::All;
   bool quiet = false;  ///< no progress on the terminal
+  /// Write report.html (outputs all and tables; with all it has the 3D view).
+  bool report = true;
   std::string progressLabel = "simulate";
 
   bool scheduling() const { return command == JobCommand::Schedule; }

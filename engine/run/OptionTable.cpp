@@ -114,8 +114,10 @@ std::vector<OptionInfo> makeTable() {
             "relative per-step difference allowed by --cross-check"),
       commandLineOnly(plain("out", K::Text, G::Output, "out", "output folder")),
       choice("outputs", G::Output, {"all", "tables", "summary"}, "all",
-             "files to write: all; tables (steps.csv, summary.json, the re-fed program); "
-             "summary (summary.json, the re-fed program)"),
+             "files to write: all; tables (steps.csv, summary.json, the re-fed program, "
+             "report.html without its 3D view); summary (summary.json, the re-fed program)"),
+      plain("no-report", K::Flag, G::Output, "",
+            "do not write report.html (the run's summary, plots and 3D view in one page)"),
       commandLineOnly(plain("quiet", K::Flag, G::Output, "", "no progress on the terminal")),
       scheduleOnly(plain("target-mrr", K::Text, G::Schedule, "auto",
                          "target MRR, e.g. 18000mm3/min, or auto")),

@@ -4,6 +4,7 @@
 #include "engine/report/Plots.h"
 #include "engine/run/Output.h"
 #include "engine/run/RefedProgram.h"
+#include "engine/run/RunReport.h"
 #include "engine/run/StepsTable.h"
 #include "engine/run/StockFiles.h"
 #include "engine/units/Quantity.h"
@@ -58,21 +59,29 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
   const Job::Outputs which = result.job.outputs;
   w.steps = which != Job::Outputs::Summary;
   if (w.steps) writeAtomically(dir / "steps.csv", stepsTable(result));
-  writeAtomically(dir / "summary.json", summaryJson(result));
+  const std::string summary = summaryJson(result);
+  writeAtomically(dir / "summary.json", summary);
   writeRefedProgram(result, dir);
   w.refedProgram = result.job.scheduling();
-  if (which != Job::Outputs::All) return w;
-  w.stockFiles = result.stock != nullptr;
-  // gnuplot draws in its own process while the stock files are written (seconds each on a
-  // fine grid); its outcome is collected below.
-  const PlotSpec ps = plotSpec(result, dir);
-  auto plots = std::async(std::launch::async, [&ps] { return writePlots(ps); });
-  w.openEdges = writeStockFiles(result, dir);
-  try {
-    for (const std::string& f : plots.get())
-      if (f.size() > 4 && f.compare(f.size() - 4, 4, ".png") == 0) w.plots.push_back(f);
-  } catch (const Error& e) {
-    std::fprintf(stderr, "engage: warning: plots not drawn: %s\n", e.what());
+  if (which == Job::Outputs::All) {
+    w.stockFiles = result.stock != nullptr;
+    // gnuplot draws in its own process while the stock files are written (seconds each on a
+    // fine grid); its outcome is collected below.
+    const PlotSpec ps = plotSpec(result, dir);
+    auto plots = std::async(std::launch::async, [&ps] { return writePlots(ps); });
+    w.openEdges = writeStockFiles(result, dir);
+    try {
+      for (const std::string& f : plots.get())
+        if (f.size() > 4 && f.compare(f.size() - 4, 4, ".png") == 0) w.plots.push_back(f);
+    } catch (const Error& e) {
+      std::fprintf(stderr, "engage: warning: plots not drawn: %s\n", e.what());
+    }
+  }
+  // The page names the other files: it comes last.
+  if (result.job.report && which != Job::Outputs::Summary) {
+    writeAtomically(dir / "report.html",
+                    runReportHtml(result, summary, w, which == Job::Outputs::All));
+    w.report = true;
   }
   return w;
 }

@@ -537,8 +537,8 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
     plotted += "," + f;
   if (written.refedProgram)
     programName = "," + std::filesystem::path(job.mainProgram()).filename().string();
-  appendf(report, "wrote %s/{%ssummary.json%s%s%s}\n", job.out.c_str(),
-          written.steps ? "steps.csv," : "",
+  appendf(report, "wrote %s/{%s%ssummary.json%s%s%s}\n", job.out.c_str(),
+          written.report ? "report.html," : "", written.steps ? "steps.csv," : "",
           written.stockFiles ? ",removed.vdb,stock.vdb,stock.stl" : "", programName.c_str(),
           plotted.c_str());
   return report;

@@ -22,6 +22,7 @@ struct WrittenOutputs {
   bool refedProgram = false;       ///< the re-fed program was written
   bool steps = true;               ///< steps.csv was written
   bool stockFiles = false;         ///< removed.vdb, stock.vdb and stock.stl were written
+  bool report = false;             ///< report.html was written
 };
 
 /// The lines `engage simulate` prints (each ending in a newline; warnings start "warning: ").

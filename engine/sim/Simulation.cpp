@@ -21,7 +21,8 @@ constexpr double kRapidNoiseVoxels = 0.5;
 /// Steps removing less than this fraction of a voxel per step are air cuts.
 constexpr double kAirVoxels = 0.01;
 
-/// The tip path of move m between fractions t0 and t1.
+}  // namespace
+
 StepPath stepPath(const Move& m, double t0, double t1) {
   StepPath p;
   p.start = pointAt(m, t0);
@@ -38,6 +39,8 @@ StepPath stepPath(const Move& m, double t0, double t1) {
   }
   return p;
 }
+
+namespace {
 
 /// Signed curvature of the tool-centre path in XY, 1/mm (+ counter-clockwise).
 double curvatureOf(const Move& m) {
@@ -79,6 +82,8 @@ std::vector<Planned> planSteps(const Toolpath& path, double L, std::size_t maxSt
 StepRecord plannedRecord(const Planned& p, const Move& m, const StepPath& sp, double& arc) {
   StepRecord r;
   r.move = p.move;
+  r.t0 = p.t0;
+  r.t1 = p.t1;
   r.line = m.line;
   r.kind = m.kind;
   r.tool = m.tool;

@@ -74,8 +74,9 @@ struct CutterSet {
 
 /// One step's record. Lengths mm, feeds mm/min, volumes mm^3, rates mm^3/min, times s.
 struct StepRecord {
-  std::size_t move = 0;  ///< index of the move in the tool path
-  int line = 0;          ///< source line
+  std::size_t move = 0;       ///< index of the move in the tool path
+  double t0 = 0.0, t1 = 1.0;  ///< the step's piece of its move (fractions; stepPath)
+  int line = 0;               ///< source line
   MoveKind kind = MoveKind::Line;
   int tool = 0;            ///< the tool in the spindle (its number; 0 before any change)
   double arcLength = 0.0;  ///< cumulative path length at the step's end
@@ -147,6 +148,10 @@ struct SimulationResult {
   std::size_t plungeSteps = 0;   ///< cutting steps without horizontal motion (no load model)
   std::size_t stoppedSteps = 0;  ///< cutting steps with no spindle speed (no load model)
 };
+
+/// The tip path of move `m` between fractions t0 and t1 of it (a step's: StepRecord::t0, t1):
+/// a line, an XY arc or helix, or a polyline of 8 pieces for other arcs and splines.
+StepPath stepPath(const Move& m, double t0, double t1);
 
 /// Check that cutting `path` into steps no longer than `stepLength` (mm) makes at most
 /// `maxSteps` steps. Throws ParameterError naming the count and the longest move.

@@ -1,0 +1,41 @@
+#pragma once
+/// \file RunReport.h
+/// report.html of a run: one self-contained page (engine/report/HtmlPage.h) with the run's
+/// summary (the figures of summary.json, which it carries whole), its warnings and
+/// collisions, plots along the path (measured and analytic MRR, programmed and scheduled feed,
+/// acceleration, chip, force, power) with the step, line and values under the pointer, and a
+/// 3D view of the final stock coloured by what last cut each place (MRR, force, tool or step).
+/// Clicking a plot shows the step in 3D with its line of G-code; clicking the stock shows the
+/// step that cut there.
+///
+/// Size: every step is plotted up to kAllSteps steps; above that the steps are cut into
+/// kBuckets runs of consecutive steps and each run keeps its extremes (lowest and highest
+/// measured and analytic MRR,
+/// highest scheduled MRR, force and acceleration, lowest scheduled feed) besides every peak
+/// summary.json names, so no peak is lost. The 3D view is the stock's surface from at most
+/// kMaxTriangles triangles (VoxelStock::viewMesh).
+
+#include "engine/run/Pipeline.h"
+#include "engine/run/Summary.h"
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace engage {
+
+/// Limits of the report's size (see the header comment).
+inline constexpr std::size_t kAllSteps = 20000;
+inline constexpr std::size_t kBuckets = 4000;
+inline constexpr std::size_t kMaxTriangles = 150000;
+
+/// The page's text. `summaryJson` is summary.json's text; `written` the files written (named
+/// on the page); `withSurface` adds the 3D view (needs the run's stock).
+std::string runReportHtml(const RunResult& result, const std::string& summaryJson,
+                          const WrittenOutputs& written, bool withSurface);
+
+/// The steps the plots keep (all up to kAllSteps, else the extremes of each bucket and the
+/// peaks), in order.
+std::vector<std::size_t> reportSteps(const RunResult& result);
+
+}  // namespace engage
