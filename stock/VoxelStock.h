@@ -89,8 +89,8 @@ class VoxelStock : public Stock {
   /// outward normals; returns the number of boundary (unpaired) edges, 0 for a closed mesh.
   std::size_t writeStl(const std::string& path) const;
   /// The stock's surface as writeStl's, for viewing, with at most about `maxTriangles`
-  /// triangles: when the stock's own grid would give more, the fractions are resampled
-  /// (trilinearly, by OpenVDB's resampleToMatch) on a grid 2, 4, 8, ... times coarser; nearly
+  /// triangles: when the stock's own grid would give more, the fractions are averaged over
+  /// blocks of 2, 4 or 8 voxels a side (at most 8: beyond that the budget is exceeded); nearly
   /// flat cells are merged (OpenVDB's adaptive meshing). `cellSize` gets the cell of the grid
   /// meshed, mm: the mesh lies within about one such cell of the stock's surface.
   TriangleMesh viewMesh(std::size_t maxTriangles, double* cellSize = nullptr) const;

@@ -127,27 +127,47 @@
       cards.appendChild(card(k, el('span', {'data-count': k}, String(counts[k]))));
     });
     section('Jobs').appendChild(cards);
+    if (B.statements && B.statements.length) {
+      var ul = el('ul');
+      B.statements.forEach(function (t) { ul.appendChild(el('li', {text: t})); });
+      var measured = section('What was measured');
+      measured.appendChild(ul);
+      main.insertBefore(measured, main.firstChild);
+    }
+    // Columns: those with a value in some row.
+    var columns = [['job', null], ['status', null], ['program', null], ['removed', 'removed', pretty(B.units.volume)],
+                   ['cutting time', 'cutting_time_s', 's'], ['peak MRR', 'peak_mrr', pretty(B.units.mrr)],
+                   ['at line', 'peak_mrr_line'], ['feed time before schedule', 'feed_time_before_s', 's'],
+                   ['after', 'feed_time_after_s', 's'], ['collisions', 'collisions']];
+    columns = columns.filter(function (c) {
+      return !c[1] || B.jobs.some(function (j) {
+        return j.figures && j.figures[c[1]] !== undefined && j.figures[c[1]] !== null;
+      });
+    });
     var rows = B.jobs.map(function (j) {
       var status = el('span', {class: j.status === 'ok' ? 'status-ok' :
                                    j.status === 'failed' ? 'status-failed' : 'status-other'},
                       j.status);
       var name = j.report ? el('a', {href: j.report}, j.name) : el('span', null, j.name);
-      var f = function (k, unit) {
-        return j.figures && j.figures[k] !== undefined && j.figures[k] !== null ?
-            num(k, unit, j.figures) : '';
-      };
       var notes = el('span', null, el('span', {title: j.program || ''}, (j.program || '').split('/').pop()));
       if (j.warnings && j.warnings.length)
         notes.appendChild(el('div', {class: 'note', style: 'color: var(--warn)'}, j.warnings.join('; ')));
       if (j.error) notes.appendChild(el('div', {class: 'status-failed job-error'}, j.error));
-      return [name, status, notes, f('removed', pretty(B.units.volume)), f('cutting_time_s', 's'),
-              f('peak_mrr', pretty(B.units.mrr)), f('peak_mrr_line'), f('feed_time_before_s', 's'),
-              f('feed_time_after_s', 's'), f('collisions')];
+      return [name, status, notes].concat(columns.slice(3).map(function (c) {
+        var v = j.figures ? j.figures[c[1]] : undefined;
+        return v !== undefined && v !== null ? num(c[1], c[2], j.figures) : '';
+      }));
     });
-    section('One row per job (name: the job\'s own report)').appendChild(el('div', {class: 'scroll'}, tableOf(
-        ['job', 'status', 'program', 'removed', 'cutting time', 'peak MRR', 'at line',
-         'feed time before schedule', 'after', 'collisions'],
-        rows)));
+    section(B.rows_title || 'One row per job (name: the job\'s own report)').appendChild(el('div', {class: 'scroll'}, tableOf(
+        columns.map(function (c) { return c[0]; }), rows)));
+    if (B.images && B.images.length) {
+      var grid = el('div', {class: 'figures'});
+      B.images.forEach(function (f) {
+        grid.appendChild(el('figure', null, el('a', {href: f}, el('img', {src: f, alt: f, loading: 'lazy'})),
+                            el('figcaption', {text: f})));
+      });
+      section('Figures').appendChild(grid);
+    }
     if (B.files && B.files.length) {
       var s = section('Files');
       B.files.forEach(function (f) { s.appendChild(el('div', null, el('a', {href: f}, f))); });
@@ -480,7 +500,7 @@
     var path = new THREE.Line(pathGeom, new THREE.LineBasicMaterial({color: 0x203060, transparent: true, opacity: 0.55}));
     path.visible = false;
     scene.add(path);
-    marker = new THREE.Mesh(new THREE.SphereBufferGeometry(diag / 120, 16, 12),
+    marker = new THREE.Mesh(new THREE.SphereBufferGeometry(diag / 90, 16, 12),
                             new THREE.MeshBasicMaterial({color: 0xd01010}));
     marker.visible = false;
     scene.add(marker);

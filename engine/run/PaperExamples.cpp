@@ -2,6 +2,7 @@
 
 #include "cutters/Error.h"
 #include "engine/model/EngagementModel.h"
+#include "engine/report/HtmlPage.h"
 #include "engine/report/Plots.h"
 #include "engine/run/CutterOptions.h"
 #include "engine/run/Job.h"
@@ -543,6 +544,56 @@ ordered_json figure14(const fs::path& dir, const fs::path& programs, const Paper
 
 }  // namespace
 
+/// report.html of the examples: the statements measured, the figures, and one row per
+/// simulation (each folder's summary.json) with a link to its own report.
+std::string paperReportHtml(const fs::path& dir, const std::string& statements) {
+  std::vector<fs::path> summaries, images;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (e.path().filename() == "summary.json") summaries.push_back(e.path());
+    if (e.path().extension() == ".png" && e.path().parent_path() == dir) images.push_back(e.path());
+  }
+  std::sort(summaries.begin(), summaries.end());
+  std::sort(images.begin(), images.end());
+  ordered_json jobs = ordered_json::array();
+  for (const fs::path& file : summaries) {
+    const ordered_json s = ordered_json::parse(readFile(file));
+    const fs::path folder = fs::relative(file.parent_path(), dir);
+    const bool report = fs::exists(file.parent_path() / "report.html");
+    jobs.push_back({{"name", folder.generic_string()},
+                    {"status", "ok"},
+                    {"program", s["program"]},
+                    {"error", nullptr},
+                    {"warnings", ordered_json::array()},
+                    {"report", report ? ordered_json((folder / "report.html").generic_string())
+                                      : ordered_json()},
+                    {"figures",
+                     {{"removed", s["removed"]},
+                      {"peak_mrr", s["peak_mrr"]["value"]},
+                      {"peak_mrr_line", s["peak_mrr"]["line"]},
+                      {"cutting_time_s", s["cutting_time_s"]},
+                      {"collisions", s["collisions"]["count"]}}}});
+  }
+  ordered_json lines = ordered_json::array();
+  std::size_t at = 0;
+  for (std::size_t nl; (nl = statements.find('\n', at)) != std::string::npos; at = nl + 1)
+    lines.push_back(statements.substr(at, nl - at));
+  ordered_json pictures = ordered_json::array();
+  for (const fs::path& p : images)
+    pictures.push_back(p.filename().string());
+  ordered_json data;
+  data["kind"] = "batch";
+  data["title"] = "engage paper: Kloypayan & Lee, IMECE2002-33615, Figs 8-14";
+  data["batch"] = {{"subtitle", dir.string() + " · every example rebuilt and measured · inches"},
+                   {"statements", lines},
+                   {"rows_title", "One row per simulation (name: its own report)"},
+                   {"jobs", jobs},
+                   {"units", {{"volume", "in^3"}, {"mrr", "in^3/min"}}},
+                   {"images", pictures},
+                   {"files", {"paper.json"}}};
+  return htmlPage(PageKind::Batch, data["title"].get<std::string>(),
+                  data.dump(-1, ' ', false, ordered_json::error_handler_t::replace));
+}
+
 std::string runPaper(const PaperOptions& o) {
   std::string text;
   if (!fs::is_directory(fs::path(o.data) / "paper"))
@@ -599,7 +650,9 @@ std::string runPaper(const PaperOptions& o) {
           f14["limit_0_3_g_in_s2"].get<double>(),
           f14["max_acceleration_measured_feed_in_s2"].get<double>(),
           f14["step_length_in"].get<double>());
-  appendf(text, "wrote %s/{paper.json, fig8*, fig9*, fig12*, fig14*, programs/} in %.0f s\n",
+  writeAtomically(dir / "report.html", paperReportHtml(dir, text));
+  appendf(text,
+          "wrote %s/{report.html, paper.json, fig8*, fig9*, fig12*, fig14*, programs/} in %.0f s\n",
           o.out.c_str(), seconds);
   outputs.keep();
   return text;
