@@ -3,7 +3,9 @@
 /// printed as one line on stderr, and turned into a non-zero exit status:
 /// 0 success, 1 invalid input (a parameter, a unit, a file), 2 command-line usage,
 /// 3 internal error, 4 a batch ran but some of its jobs failed (their records hold the errors),
-/// 5 a simulate, schedule or batch run completed but a rapid, a shank or a holder met material.
+/// 5 a simulate, schedule or batch run completed but a rapid, a shank or a holder met material,
+/// 130 interrupted (SIGINT or SIGTERM: the run stops at its next step and removes what it made,
+/// as a failed run does; a second signal ends the process at once).
 
 #include "apps/AnalyzeCommand.h"
 #include "apps/BatchCommand.h"
@@ -12,12 +14,24 @@
 #include "apps/PocketCommand.h"
 #include "apps/SimulateCommand.h"
 #include "cutters/Error.h"
+#include "engine/sim/Simulation.h"
 
 #include <CLI/CLI.hpp>
 
+#include <csignal>
 #include <exception>
 #include <functional>
 #include <iostream>
+
+namespace {
+
+/// The first SIGINT or SIGTERM asks the run to stop; the next one ends the process.
+extern "C" void onStopSignal(int sig) {
+  engage::requestStop();
+  std::signal(sig, SIG_DFL);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -38,8 +52,13 @@ int main(int argc, char** argv) {
     // --help and --version exit 0; every other usage error exits 2 with CLI11's message.
     return app.exit(e) == 0 ? 0 : 2;
   }
+  std::signal(SIGINT, onStopSignal);
+  std::signal(SIGTERM, onStopSignal);
   try {
     return run ? run() : 2;
+  } catch (const engage::Interrupted&) {
+    std::cerr << "engage: interrupted: the run stopped and removed what it had made\n";
+    return 130;
   } catch (const engage::Error& e) {
     std::cerr << "engage: error: " << e.what() << '\n';
     return 1;

@@ -21,4 +21,11 @@ class ParameterError : public Error {
   explicit ParameterError(const std::string& message) : Error(message) {}
 };
 
+/// The run was asked to stop (SIGINT, SIGTERM: engage::requestStop in Simulation.h) and
+/// unwound: what it had made is removed as after any failure.
+class Interrupted : public Error {
+ public:
+  Interrupted() : Error("interrupted") {}
+};
+
 }  // namespace engage

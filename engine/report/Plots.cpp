@@ -2,7 +2,11 @@
 
 #include "cutters/Error.h"
 
+#include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 
@@ -31,6 +35,20 @@ std::string bothFormats(const std::string& name, const std::string& body,
   return script;
 }
 
+/// Run a shell command and wait for it; its wait status (-1 when it cannot start). Not
+/// std::system, which ignores SIGINT in the whole process while the command runs: a Ctrl-C
+/// then would not stop engage (apps/main.cpp).
+int runShell(const std::string& command) {
+  pid_t pid = 0;
+  std::string sh = "/bin/sh", dashC = "-c", text = command;
+  char* argv[] = {sh.data(), dashC.data(), text.data(), nullptr};
+  if (posix_spawn(&pid, "/bin/sh", nullptr, nullptr, argv, environ) != 0) return -1;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return -1;
+  return status;
+}
+
 /// Run gnuplot on `script` in `dir`, then give the plots their names.
 void runGnuplot(const std::filesystem::path& dir, const std::string& scriptName,
                 const std::string& script, std::vector<std::string>& files) {
@@ -43,7 +61,7 @@ void runGnuplot(const std::filesystem::path& dir, const std::string& scriptName,
   const std::string log = scriptName + ".log";
   const std::string command =
       "cd " + quoted(dir.string()) + " && gnuplot " + quoted(scriptName) + " 2> " + quoted(log);
-  const int rc = std::system(command.c_str());
+  const int rc = runShell(command);
   if (rc != 0) {
     // Say what gnuplot said (its last line), and leave no half-drawn plot behind.
     std::string said;

@@ -86,6 +86,10 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
                                ? ordered_json(1.0 - out.plan.timeAfter / out.plan.timeBefore)
                                : ordered_json();
     r["warnings"] = runWarnings(out, written);
+  } catch (const Interrupted&) {
+    // Not the job's failure: no record, so that the next run does it again.
+    fs::remove_all(partial);
+    throw;
   } catch (const std::exception& e) {
     r["status"] = "failed";
     r["error"] = e.what();

@@ -95,6 +95,8 @@ CompletedRun runIntoFolder(Job job) {
   run.result = executeRun(std::move(prepared), progress);
   StagedOutputs staged(run.result.job.out);
   run.written = writeRunOutputs(run.result, staged.staging());
+  // Interrupted while writing: nothing is published (the staging goes with the unwinding).
+  if (stopRequested()) throw Interrupted();
   staged.publish();
   outputs.keep();
   return run;

@@ -4,6 +4,7 @@
 #include "cutters/Sweep.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -21,7 +22,19 @@ constexpr double kRapidNoiseVoxels = 0.5;
 /// Steps removing less than this fraction of a voxel per step are air cuts.
 constexpr double kAirVoxels = 0.01;
 
+/// Set by requestStop.
+std::atomic<bool> stopFlag{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "requestStop must be async-signal-safe");
+
 }  // namespace
+
+void requestStop() noexcept {
+  stopFlag.store(true, std::memory_order_relaxed);
+}
+
+bool stopRequested() noexcept {
+  return stopFlag.load(std::memory_order_relaxed);
+}
 
 StepPath stepPath(const Move& m, double t0, double t1) {
   StepPath p;
@@ -261,6 +274,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   double arc = 0.0;
   out.steps.reserve(plan.size());
   for (std::size_t si = 0; si < plan.size(); ++si) {
+    if (stopRequested()) throw Interrupted();
     const Planned& p = plan[si];
     const Move& m = path.moves[p.move];
     const StepPath sp = stepPath(m, p.t0, p.t1);
@@ -386,6 +400,7 @@ SimulationResult analyticSteps(const Toolpath& path, const CutterSet& cutters,
   out.volumeBefore = out.volumeAfter = kNaN;
   double arc = 0.0;
   for (const Planned& p : planSteps(path, L, options.maxSteps)) {
+    if (stopRequested()) throw Interrupted();
     const Move& m = path.moves[p.move];
     const StepPath sp = stepPath(m, p.t0, p.t1);
     StepRecord r = plannedRecord(p, m, sp, arc);

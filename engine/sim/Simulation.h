@@ -153,6 +153,14 @@ struct SimulationResult {
 /// a line, an XY arc or helix, or a polyline of 8 pieces for other arcs and splines.
 StepPath stepPath(const Move& m, double t0, double t1);
 
+/// Ask every simulation of this process to stop at its next step: simulate() and
+/// analyticSteps() then throw Interrupted, and the run unwinds like a failed one (its staging
+/// and new folders removed). Async-signal-safe (a lock-free atomic store), for the command
+/// line's SIGINT and SIGTERM handlers.
+void requestStop() noexcept;
+/// Whether requestStop was called (the writers of a run check it before they publish).
+bool stopRequested() noexcept;
+
 /// Check that cutting `path` into steps no longer than `stepLength` (mm) makes at most
 /// `maxSteps` steps. Throws ParameterError naming the count and the longest move.
 void checkStepCount(const Toolpath& path, double stepLength, std::size_t maxSteps);

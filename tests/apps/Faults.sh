@@ -106,6 +106,44 @@ run "$out"
 check "after the kills: a new run completes" complete "$out"
 check "after the kills: no staging folder left" bash -c "! ls -A '$out' | grep -q engage-partial"
 
+# SIGINT and SIGTERM into a new folder: the run stops at its next step (or before it publishes)
+# with status 130 and removes the folders it made; a second signal is not needed.
+for t in 0.5 1.5 2.5 3.5; do
+  for sig in INT TERM; do
+    out=$work/fresh/run
+    rm -rf "$work/fresh"
+    "$engage" simulate "$data/gcode/bench/finishing_raster.ngc" --tool ball --diameter 1mm \
+      --stock box:0,0,-10,65,65,0 --voxel 0.2mm --quiet --out "$out" >/dev/null 2>"$work/err.txt" &
+    pid=$!
+    sleep "$t"
+    kill -s "$sig" "$pid" 2>/dev/null
+    wait "$pid"
+    rc=$?
+    if [ "$rc" -eq 130 ]; then
+      check "kill -$sig at $t s: nothing left of the new folder" absent "$work/fresh"
+      check "kill -$sig at $t s: says it was interrupted" grep -q "engage: interrupted" "$work/err.txt"
+    else
+      check "kill -$sig at $t s: exit 130, or 0 for a run that had ended (got $rc)" test "$rc" -eq 0
+      check "kill -$sig at $t s: a run that ended is complete" complete "$out"
+    fi
+  done
+done
+
+# A batch interrupted: no record for the job it was running, and the next run completes it.
+out=$work/batch_int
+rm -rf "$out"
+"$engage" batch "$data/../tests/data/batch/manifest.json" --out "$out" --quiet >/dev/null 2>&1 &
+pid=$!
+sleep 0.7
+kill -INT "$pid" 2>/dev/null
+wait "$pid"
+rc=$?
+# 130, or 4 if it had ended (its broken job fails by design).
+check "batch interrupted: exit 130 (or 4: it had ended; got $rc)" test "$rc" -eq 130 -o "$rc" -eq 4
+check "batch interrupted: no partial job folder" bash -c "! ls '$out/jobs' | grep -q partial"
+"$engage" batch "$data/../tests/data/batch/manifest.json" --out "$out" --quiet >/dev/null 2>&1
+check "batch interrupted: the rerun records every job" test "$(ls "$out"/jobs/*/job.json | wc -l)" -eq 5
+
 # Two runs into one folder at once.
 out=$work/both
 "$engage" simulate "$data/gcode/dialects/fusion360_pocket.nc" --tool flat --diameter 6mm \
