@@ -245,7 +245,7 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
   std::string csv = "job,name,command,program,status,run_time_s,moves,steps,removed_" + V +
                     ",peak_mrr_" + Q +
                     ",peak_mrr_line,cutting_time_s,feed_time_before_s,feed_time_after_s,"
-                    "saving_relative,warnings,error\n";
+                    "saving_relative,collisions,warnings,error\n";
   ordered_json summary = ordered_json::array();
   std::size_t ok = 0;
   for (const ordered_json& r : records) {
@@ -260,7 +260,7 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
            value(r["peak_mrr_mm3_min"], Dimension::VolumeRate) + "," + plain(r["peak_mrr_line"]) +
            "," + plain(r["cutting_time_s"]) + "," + plain(r["feed_time_before_s"]) + "," +
            plain(r["feed_time_after_s"]) + "," + plain(r["saving_relative"]) + "," +
-           quote(warnings) + "," +
+           plain(r["collisions"]) + "," + quote(warnings) + "," +
            quote(r["error"].is_null() ? "" : r["error"].get<std::string>()) + "\n";
     ordered_json s = r;
     s.erase("spec");
