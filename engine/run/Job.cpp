@@ -308,7 +308,10 @@ std::string optionText(const OptionValues& values, const std::string& name) {
   return o ? o->defaultText : std::string();
 }
 
-Job makeJob(JobCommand command, const OptionValues& values) {
+namespace {
+
+/// makeJob's work; `speak` gets the report units as soon as they are known.
+Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) {
   checkNames(command, values);
   auto text = [&](const char* name) { return optionText(values, name); };
   for (const OptionInfo& o : jobOptions())
@@ -360,6 +363,7 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   const UnitSystem sys = job.path.inch ? UnitSystem::Inch : UnitSystem::Metric;
   const std::string units = text("units");
   job.units = units == "in" ? UnitSystem::Inch : units == "mm" ? UnitSystem::Metric : sys;
+  speak = job.units;
   ToolOptions tool{text("tool"),          text("diameter"),
                    text("corner-radius"), text("taper-angle"),
                    text("tip-angle"),     text("bottom-angle"),
@@ -493,6 +497,19 @@ Job makeJob(JobCommand command, const OptionValues& values) {
   job.report = text("no-report") != "true";
   job.progressLabel = commandName(command);
   return job;
+}
+
+}  // namespace
+
+Job makeJob(JobCommand command, const OptionValues& values) {
+  // The cutter's and the stock's checks speak mm; an inch run's errors speak inches.
+  UnitSystem speak = UnitSystem::Metric;
+  try {
+    return buildJob(command, values, speak);
+  } catch (const ParameterError& e) {
+    if (speak == UnitSystem::Metric) throw;
+    throw ParameterError(inReportUnits(e.what(), speak));
+  }
 }
 
 }  // namespace engage

@@ -75,7 +75,9 @@ CrossCheck crossCheck(const Job& job, const SimulationResult& r, Stock& other) {
 
 }  // namespace
 
-PreparedRun prepareRun(Job job) {
+namespace {
+
+PreparedRun prepareStocks(Job job) {
   // Bounded work: a move of 1e9 mm or a helix of 100000 turns is refused before anything.
   checkStepCount(job.path, job.stepLength(), job.simulation.maxSteps);
   PreparedRun run;
@@ -88,6 +90,19 @@ PreparedRun prepareRun(Job job) {
   }
   run.job = std::move(job);
   return run;
+}
+
+}  // namespace
+
+PreparedRun prepareRun(Job job) {
+  // The stocks' checks speak mm; an inch run's errors speak inches.
+  const UnitSystem speak = job.units;
+  try {
+    return prepareStocks(std::move(job));
+  } catch (const ParameterError& e) {
+    if (speak == UnitSystem::Metric) throw;
+    throw ParameterError(inReportUnits(e.what(), speak));
+  }
 }
 
 RunResult executeRun(PreparedRun run, const ProgressFunction& progress) {

@@ -332,6 +332,86 @@ std::string formatQuantity(double internal, Dimension dim, UnitSystem sys) {
   return formatNumber(toDisplay(internal, dim, sys)) + " " + std::string(unitLabel(dim, sys));
 }
 
+std::string inReportUnits(const std::string& message, UnitSystem sys) {
+  if (sys == UnitSystem::Metric) return message;
+  // Longest unit first, so that "mm^3/min" is not read as "mm^3".
+  struct Unit {
+    const char* mm;
+    Dimension dim;
+  };
+  static const Unit units[] = {
+      {" mm^3/min", Dimension::VolumeRate}, {" mm/s^2", Dimension::Acceleration},
+      {" mm/min", Dimension::Feed},         {" mm^3", Dimension::Volume},
+      {" mm^2", Dimension::Area},           {" mm", Dimension::Length}};
+  const std::string& m = message;
+  const std::size_t n = m.size();
+  auto digit = [&](std::size_t k) {
+    return k < n && std::isdigit(static_cast<unsigned char>(m[k]));
+  };
+  // The end of a number starting at k (k itself when there is none): sign, digits and point,
+  // exponent.
+  auto numberEnd = [&](std::size_t k) {
+    std::size_t e = k;
+    if (e < n && (m[e] == '-' || m[e] == '+')) ++e;
+    const std::size_t first = e;
+    while (digit(e) || (e < n && m[e] == '.'))
+      ++e;
+    if (e == first || !(digit(e - 1) || digit(first))) return k;
+    if (e < n && (m[e] == 'e' || m[e] == 'E')) {
+      std::size_t f = e + 1;
+      if (f < n && (m[f] == '-' || m[f] == '+')) ++f;
+      const std::size_t g = f;
+      while (digit(f))
+        ++f;
+      if (f > g) e = f;
+    }
+    return e;
+  };
+  // The unit right after a number ending at e, as a whole word.
+  auto unitAt = [&](std::size_t e) -> const Unit* {
+    for (const Unit& u : units) {
+      const std::size_t len = std::char_traits<char>::length(u.mm);
+      if (m.compare(e, len, u.mm) == 0 &&
+          (e + len >= n || !std::isalnum(static_cast<unsigned char>(m[e + len]))))
+        return &u;
+    }
+    return nullptr;
+  };
+  auto value = [&](std::size_t from, std::size_t to) {
+    double v = 0.0;
+    const char* b = m.data() + from + (m[from] == '+' ? 1 : 0);
+    return std::from_chars(b, m.data() + to, v).ptr == m.data() + to ? v : std::nan("");
+  };
+  std::string out;
+  for (std::size_t i = 0; i < n;) {
+    const bool boundary = i == 0 || !(std::isalnum(static_cast<unsigned char>(m[i - 1])) ||
+                                      m[i - 1] == '_' || m[i - 1] == '.');
+    const std::size_t e = boundary ? numberEnd(i) : i;
+    if (e > i) {
+      const double v = value(i, e);
+      if (const Unit* u = unitAt(e); u && !std::isnan(v)) {
+        out += formatQuantity(v, u->dim, sys);
+        i = e + std::char_traits<char>::length(u->mm);
+        continue;
+      }
+      // The first end of a range: "-12.7 to 12.7 mm".
+      if (m.compare(e, 4, " to ") == 0 && !std::isnan(v)) {
+        const std::size_t e2 = numberEnd(e + 4);
+        if (const Unit* u = e2 > e + 4 ? unitAt(e2) : nullptr) {
+          out += formatNumber(toDisplay(v, u->dim, sys));
+          i = e;
+          continue;
+        }
+      }
+      out.append(m, i, e - i);
+      i = e;
+      continue;
+    }
+    out += m[i++];
+  }
+  return out;
+}
+
 std::string_view systemName(UnitSystem sys) {
   return sys == UnitSystem::Inch ? "in" : "mm";
 }

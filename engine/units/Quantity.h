@@ -80,4 +80,11 @@ std::string formatNumber(double value);
 /// "mm" or "in".
 std::string_view systemName(UnitSystem sys);
 
+/// A library's message (which speaks internal units: "5.08 mm", "1.2 mm^3", "600 mm/min") in
+/// the report units: for an inch run every "<number> mm", "mm^2", "mm^3", "mm/min",
+/// "mm^3/min" and "mm/s^2" becomes its value in inches (six significant digits); metric
+/// messages are returned as they are. The command's boundary uses it so that an inch run's
+/// errors speak inches.
+std::string inReportUnits(const std::string& message, UnitSystem sys);
+
 }  // namespace engage

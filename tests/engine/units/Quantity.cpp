@@ -78,3 +78,27 @@ TEST_CASE("formatting converts back and labels the unit", "[units]") {
   CHECK(std::string(unitTag(Dimension::VolumeRate, UnitSystem::Metric)) == "mm3_min");
   CHECK(formatNumber(std::nan("")) == "nan");
 }
+
+TEST_CASE("a library's message speaks the run's units", "[units]") {
+  const UnitSystem in = UnitSystem::Inch;
+  // 5.08 mm = 0.2 in and 3.175 mm = 0.125 in exactly (1 in = 25.4 mm).
+  CHECK(inReportUnits("corner radius r_tc = 5.08 mm must not exceed the cutter radius r = 3.175 mm",
+                      in) ==
+        "corner radius r_tc = 0.2 in must not exceed the cutter radius r = 0.125 in");
+  // A range names its unit once: both ends are converted.
+  CHECK(inReportUnits("stock box is empty along X: -12.7 to -12.7 mm", in) ==
+        "stock box is empty along X: -0.5 to -0.5 in");
+  // Volumes (25.4^3 = 16387.064 mm^3 a cubic inch), feeds, rates, accelerations.
+  CHECK(inReportUnits("met 1638.7064 mm^3", in) == "met 0.1 in^3");
+  CHECK(inReportUnits("at 2540 mm/min", in) == "at 100 in/min");
+  CHECK(inReportUnits("target 16387.064 mm^3/min", in) == "target 1 in^3/min");
+  CHECK(inReportUnits("limit 254 mm/s^2.", in) == "limit 10 in/s^2.");
+  CHECK(inReportUnits("a move of 2.54e+09 mm", in) == "a move of 1e+08 in");
+  // Not a length in mm: typed values ("12mm"), words ("D6 mm", "mmx"), other units, counts.
+  CHECK(inReportUnits("expected a length such as 12mm, found '1furlong'", in) ==
+        "expected a length such as 12mm, found '1furlong'");
+  CHECK(inReportUnits("tool D6 mm", in) == "tool D6 mm");
+  CHECK(inReportUnits("6 mmx, 4 GB, 3 voxels", in) == "6 mmx, 4 GB, 3 voxels");
+  // Metric runs: unchanged.
+  CHECK(inReportUnits("r = 3.175 mm", UnitSystem::Metric) == "r = 3.175 mm");
+}
