@@ -325,6 +325,7 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   ReaderOptions ro;
   ro.toolTable = text("tool-table");
   ro.toolTableInch = text("tool-table-units") == "in";
+  job.toolTableInch = ro.toolTableInch;
   std::optional<ToolLibrary> library;
   job.toolsFile = text("tools");
   // A CAMotics project: its programs, its tool table (unless --tools), its workpiece (unless

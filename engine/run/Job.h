@@ -46,8 +46,9 @@ struct Job {
   /// The single cutter (--tool), or with --tools the program's tool of the smallest radius
   /// (the default voxel and step follow it).
   AptCutter cutter = AptCutter::flat(1.0, 1.0);
-  std::string toolsFile;    ///< --tools, as given ("" for none)
-  std::string toolsFormat;  ///< its format: linuxcnc, fusion360, freecad, camotics
+  std::string toolsFile;       ///< --tools, as given ("" for none)
+  std::string toolsFormat;     ///< its format: linuxcnc, fusion360, freecad, camotics
+  bool toolTableInch = false;  ///< a LinuxCNC table's lengths are inches (--tool-table-units in)
   /// With --tools: the library's entries of the tools the program loads, by number.
   std::map<int, ToolEntry> tools;
   /// With --tools and no --tool: the tool taken to be in the spindle before the program's

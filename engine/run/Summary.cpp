@@ -403,6 +403,23 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
                                             : ", the tool CAMotics selects when none is") +
                   ": give --tool for the tool in the spindle at the start");
   }
+  // A LinuxCNC table is in the machine's units, which the program does not tell: an inch
+  // program whose tools all come out under 1 mm across most likely has an inch table.
+  if (job.toolsFormat == "linuxcnc" && job.path.inch && !job.toolTableInch && !job.tools.empty()) {
+    bool tiny = true;
+    std::string example;
+    for (const auto& [number, entry] : job.tools) {
+      if (!entry.cutter) continue;
+      const double d = 2.0 * entry.cutter->maxRadius();
+      tiny = tiny && d < 1.0;
+      if (example.empty()) example = "T" + std::to_string(number) + " " + formatNumber(d) + " mm";
+    }
+    if (tiny && !example.empty())
+      w.push_back(
+          "the LinuxCNC tool table was read in mm (--tool-table-units mm, the default), "
+          "and every tool this inch program loads is under 1 mm across (" +
+          example + "): if the table is in inches, give --tool-table-units in");
+  }
   if (written.openEdges > 0)
     w.push_back("stock.stl has " + std::to_string(written.openEdges) + " open edges");
   if (result.sim.plungeSteps > 0)
