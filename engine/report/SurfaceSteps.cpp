@@ -18,7 +18,7 @@ namespace {
 class PointBins {
  public:
   PointBins(const std::vector<std::array<float, 3>>& points, double cell)
-      : points_(points), cell_(cell), order_(points.size()) {
+      : cell_(cell), order_(points.size()) {
     std::vector<std::int64_t> keys(points.size());
     for (std::size_t i = 0; i < points.size(); ++i) {
       keys[i] = key(bin(points[i][0]), bin(points[i][1]), bin(points[i][2]));
@@ -59,7 +59,6 @@ class PointBins {
     return (u(x) << 42) | (u(y) << 21) | u(z);
   }
 
-  const std::vector<std::array<float, 3>>& points_;
   double cell_;
   std::vector<std::uint32_t> order_;
   std::unordered_map<std::int64_t, std::pair<std::uint32_t, std::uint32_t>> ranges_;
