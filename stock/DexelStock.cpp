@@ -66,7 +66,7 @@ double overlap(double a0, double a1, double b0, double b1) {
 void checkMemory(double rays) {
   const double pages = static_cast<double>(sysconf(_SC_PHYS_PAGES));
   const double pageSize = static_cast<double>(sysconf(_SC_PAGE_SIZE));
-  const double bytes = rays * 48.0;  // a vector, a weight and one interval per ray
+  const double bytes = rays * DexelStock::kBytesPerRay;
   if (pages > 0 && pageSize > 0 && bytes > 0.5 * pages * pageSize)
     throw ParameterError("a dexel stock of " + std::to_string(static_cast<long long>(rays)) +
                          " rays needs about " +
@@ -248,6 +248,12 @@ void rampSolid(const StepPath& path, const AptCutter& cutter, const Eigen::Vecto
 }
 
 }  // namespace
+
+double DexelStock::memoryBound(const Box3& b, double spacing) {
+  const double nx = std::ceil((b.max.x() - b.min.x()) / spacing - 1e-9);
+  const double ny = std::ceil((b.max.y() - b.min.y()) / spacing - 1e-9);
+  return nx * ny * kBytesPerRay;
+}
 
 DexelStock::DexelStock(const Box3& b, double spacing) : h_(spacing) {
   if (!(spacing > 0.0 && std::isfinite(spacing)))

@@ -39,6 +39,11 @@ class DexelStock : public Stock {
   /// A box of material (mm). Throws ParameterError for an empty box, a non-positive spacing
   /// or a ray count that would not fit in this machine's memory.
   static DexelStock box(const Box3& box, double spacing);
+  /// Bytes a ray holds before it is cut: a vector, a weight and one interval.
+  static constexpr double kBytesPerRay = 48.0;
+  /// Bytes of a box stock's rays, uncut (cuts add intervals and the removal log): what box()
+  /// checks, and a lower bound a batch reserves for the job (engine/run/Batch.h).
+  static double memoryBound(const Box3& box, double spacing);
   /// Material inside a closed triangle mesh (STL, OBJ, PLY), by casting every ray through it
   /// (even-odd). Throws as VoxelStock::fromMesh.
   static DexelStock fromMesh(const std::string& path, double spacing);

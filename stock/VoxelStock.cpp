@@ -121,12 +121,16 @@ double physicalMemory() {
 /// Refuse, before allocating, a grid whose voxels could not all be held: a fully cut stock
 /// stores every voxel in leaves (4 bytes), the removed capture three more grids (12 bytes),
 /// and each leaf a table of its voxels' planes (2 bytes per voxel, more for partial voxels).
+double voxelCount(const Box3& box, double h) {
+  const Eigen::Vector3d size = box.max - box.min;
+  return (size.x() / h + 2) * (size.y() / h + 2) * (size.z() / h + 2);
+}
+
 void checkMemory(const Box3& box, double h) {
   if (!(std::isfinite(h) && h > 0.0))
     throw ParameterError("voxel size = " + num(h) + " mm must be positive");
-  const Eigen::Vector3d size = box.max - box.min;
-  const double voxels = (size.x() / h + 2) * (size.y() / h + 2) * (size.z() / h + 2);
-  const double bytes = voxels * 18.0 * 1.1;
+  const double voxels = voxelCount(box, h);
+  const double bytes = VoxelStock::memoryBound(box, h);
   const double limit = 0.75 * physicalMemory();
   if (bytes > limit)
     throw ParameterError("voxel size = " + num(h) + " mm makes " + num(voxels) +
@@ -1272,6 +1276,10 @@ std::size_t VoxelStock::writeStl(const std::string& path) const {
   const TriangleMesh mesh = isoSurface(*impl_->grid, 0.0);
   engage::writeStl(mesh, path);
   return boundaryEdgeCount(mesh);
+}
+
+double VoxelStock::memoryBound(const Box3& box, double voxelSize) {
+  return voxelCount(box, voxelSize) * 18.0 * 1.1;
 }
 
 TriangleMesh VoxelStock::viewMesh(std::size_t maxTriangles, double* cellSize) const {

@@ -40,6 +40,10 @@ class VoxelStock : public Stock {
   /// Throws ParameterError for an empty box, a non-positive voxel size, or a voxel size whose
   /// grid would not fit in this machine's memory (checked before anything is allocated).
   static VoxelStock box(const Box3& box, double voxelSize);
+  /// Bytes a box stock may come to hold at most, cut everywhere (every voxel in leaves, the
+  /// capture grids, the planes): what box() checks against this machine's memory, and what a
+  /// batch reserves for the job (engine/run/Batch.h).
+  static double memoryBound(const Box3& box, double voxelSize);
   /// Material inside a closed triangle mesh (STL, OBJ, PLY; read with OpenMesh). Throws
   /// Error for a missing or unreadable file, ParameterError for an open mesh (naming the
   /// number of boundary edges) or a voxel size that would not fit in memory.

@@ -22,6 +22,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -41,9 +42,115 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using nlohmann::ordered_json;
 
+/// The memory a batch's jobs may hold at once: each job reserves its estimate
+/// (memoryEstimate, Pipeline.h) before it runs and waits while the running ones' reservations
+/// and its own would exceed the budget, so that workers are fewer where jobs are large. A job
+/// runs when nothing else does, whatever its estimate (its stock's own check refuses what
+/// cannot fit at all).
+class MemoryBudget {
+ public:
+  explicit MemoryBudget(double bytes) : total_(bytes) {}
+  /// A reservation, released when it goes.
+  class Ticket {
+   public:
+    Ticket(MemoryBudget& budget, double bytes, const std::string& job)
+        : budget_(budget), bytes_(bytes) {
+      std::unique_lock<std::mutex> lock(budget_.mutex_);
+      bool said = false;
+      while (budget_.running_ > 0 && budget_.used_ + bytes_ > budget_.total_) {
+        if (!said)  // in the log too (--quiet): it tells why the batch runs fewer jobs at once
+          std::fprintf(stderr,
+                       "batch: job %s needs about %.2f GB; waiting for running jobs to free "
+                       "memory (%.2f GB for the batch)\n",
+                       job.c_str(), bytes_ / 1e9, budget_.total_ / 1e9);
+        said = true;
+        budget_.freed_.wait(lock);
+      }
+      budget_.used_ += bytes_;
+      ++budget_.running_;
+    }
+    ~Ticket() {
+      {
+        std::lock_guard<std::mutex> lock(budget_.mutex_);
+        budget_.used_ -= bytes_;
+        --budget_.running_;
+      }
+      budget_.freed_.notify_all();
+    }
+    Ticket(const Ticket&) = delete;
+    Ticket& operator=(const Ticket&) = delete;
+
+   private:
+    MemoryBudget& budget_;
+    double bytes_;
+  };
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable freed_;
+  double total_, used_ = 0.0;
+  int running_ = 0;
+};
+
+/// The memory this process may use, bytes: the machine's available memory (MemAvailable),
+/// bounded by a cgroup v2 limit (memory.max less memory.current) where one is set.
+double availableMemory() {
+  double bytes = 8e9;
+  {
+    std::ifstream in("/proc/meminfo");
+    std::string key;
+    double kb = 0.0;
+    while (in >> key >> kb) {
+      if (key == "MemAvailable:") {
+        bytes = kb * 1024.0;
+        break;
+      }
+      in.ignore(256, '\n');
+    }
+  }
+  std::string max;
+  double current = 0.0;
+  if (std::ifstream("/sys/fs/cgroup/memory.max") >> max && max != "max" &&
+      std::ifstream("/sys/fs/cgroup/memory.current") >> current)
+    bytes = std::min(bytes, std::atof(max.c_str()) - current);
+  return std::max(bytes, 0.0);
+}
+
+/// "8GB", "512MB", "2GiB", "1.5G", "4000000000" as bytes. Throws ParameterError.
+double parseMemory(const std::string& text) {
+  std::size_t used = 0;
+  double v = 0.0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  std::string unit = text.substr(used);
+  std::transform(unit.begin(), unit.end(), unit.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  static const std::pair<const char*, double> units[] = {{"", 1.0},
+                                                         {"B", 1.0},
+                                                         {"K", 1e3},
+                                                         {"KB", 1e3},
+                                                         {"KIB", 1024.0},
+                                                         {"M", 1e6},
+                                                         {"MB", 1e6},
+                                                         {"MIB", 1048576.0},
+                                                         {"G", 1e9},
+                                                         {"GB", 1e9},
+                                                         {"GIB", 1073741824.0},
+                                                         {"T", 1e12},
+                                                         {"TB", 1e12},
+                                                         {"TIB", 1099511627776.0}};
+  for (const auto& [name, factor] : units)
+    if (used > 0 && unit == name && std::isfinite(v) && v > 0.0) return v * factor;
+  throw ParameterError("--memory: expected an amount such as 8GB or 512MB, found '" + text + "'");
+}
+
 /// Run one job into DIR/jobs/NAME (through NAME.partial, renamed when complete) and return
 /// its record. A job's failure is its record; it never stops the batch.
-ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::string& outputs) {
+ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::string& outputs,
+                    MemoryBudget& memory) {
   const fs::path partial = jobs / (job.name + ".partial"), done = jobs / job.name;
   fs::remove_all(partial);
   fs::create_directories(partial);
@@ -59,7 +166,9 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     values["out"] = partial.string();
     values["quiet"] = "true";
     if (!outputs.empty() && !values.count("outputs")) values["outputs"] = outputs;
-    const CompletedRun run = runIntoFolder(makeJob(job.command, values));
+    Job made = makeJob(job.command, values);
+    const MemoryBudget::Ticket reserved(memory, memoryEstimate(made), job.name);
+    const CompletedRun run = runIntoFolder(std::move(made));
     const RunResult& out = run.result;
     const WrittenOutputs& written = run.written;
     const SimulationResult& sim = out.sim;
@@ -319,6 +428,7 @@ int usableCpus() {
 BatchReport runBatch(const BatchOptions& o) {
   const std::vector<ManifestJob> all = readManifest(o.manifest);
   const Shard shard = parseShard(o.shard);
+  const double memoryLimit = o.memory.empty() ? 0.0 : parseMemory(o.memory);
   const UnitSystem sys = unitsOf(o.units);
   if (o.workers < 0) throw ParameterError("--workers must not be negative");
   if (!o.job.empty()) {
@@ -391,6 +501,8 @@ BatchReport runBatch(const BatchOptions& o) {
                  todo.size(), failed.load(), s);
   };
   report();
+  // Jobs side by side hold at most --memory, else 80 % of the memory available now.
+  MemoryBudget memory(memoryLimit > 0.0 ? memoryLimit : 0.8 * availableMemory());
   std::vector<std::thread> pool;
   for (int w = 0; w < workers; ++w)
     pool.emplace_back([&]() {
@@ -413,7 +525,7 @@ BatchReport runBatch(const BatchOptions& o) {
           continue;
         }
         try {
-          arena.execute([&] { r = runOne(*todo[k], jobs, o.outputs); });
+          arena.execute([&] { r = runOne(*todo[k], jobs, o.outputs, memory); });
         } catch (...) {
           // A job's own failure is its record; this is the batch's (its record cannot be
           // written: a full disk, say). The batch stops and reports it, it does not crash.

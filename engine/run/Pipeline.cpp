@@ -94,6 +94,20 @@ PreparedRun prepareStocks(Job job) {
 
 }  // namespace
 
+double memoryEstimate(const Job& job) {
+  double bytes = 64e6;
+  if (job.stock.box) {
+    auto one = [&](StockModel m) {
+      return m == StockModel::Voxel ? VoxelStock::memoryBound(*job.stock.box, job.voxel)
+                                    : DexelStock::memoryBound(*job.stock.box, job.voxel) /
+                                          DexelStock::kBytesPerRay * 1000.0;
+    };
+    bytes += one(job.stockModel);
+    if (job.crossCheck) bytes += one(job.otherModel());
+  }
+  return bytes;
+}
+
 PreparedRun prepareRun(Job job) {
   // The stocks' checks speak mm; an inch run's errors speak inches.
   const UnitSystem speak = job.units;

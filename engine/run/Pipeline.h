@@ -52,6 +52,13 @@ struct RunResult {
   std::size_t peakStep = 0;  ///< the step of the highest measured MRR (0 when none)
 };
 
+/// The memory a run of `job` may come to hold, bytes, for a batch to decide how many jobs run
+/// side by side: 64 MB for the program, steps and outputs, plus per stock (and the
+/// cross-check's) of a box: the voxel model's bound (VoxelStock::memoryBound: 845 MB for the
+/// finishing benchmark at 0.1 mm, whose run peaks at 734 MB) or 1 kB per dexel ray (that run
+/// with dexels: 350 MB for 422,500 rays). A mesh stock counts its bounds unknown: the 64 MB.
+double memoryEstimate(const Job& job);
+
 /// Build the job's stock (and the cross-check's) and check that the tool path reaches it.
 /// Throws Error; writes nothing.
 PreparedRun prepareRun(Job job);

@@ -375,3 +375,23 @@ TEST_CASE("a schedule to a chip thickness target holds it when re-simulated", "[
   }
   CHECK(straight > 10);
 }
+
+TEST_CASE("a job's memory estimate follows its stock's closed-form bounds", "[run]") {
+  test::TempFolder dir("pipeline_memory");
+  const std::string program = dir.write("slot.ngc", test::slotProgram());
+  OptionValues v = {{"program", program},
+                    {"tool", "flat"},
+                    {"diameter", "6mm"},
+                    {"stock", "box:0,0,-10,10,10,0"},
+                    {"voxel", "1mm"}};
+  // Voxels: (10 / 1 + 2)^3 = 1728 of at most 18 bytes with 10 % slack, on 64 MB for the rest.
+  const double voxels = 1728.0 * 18.0 * 1.1;
+  CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) == Approx(64e6 + voxels));
+  // Dexels: 10 x 10 rays of 1 kB each.
+  v["stock-model"] = "dexel";
+  CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) == Approx(64e6 + 100 * 1000.0));
+  // A cross-check holds both stocks.
+  v["cross-check"] = "true";
+  CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) ==
+        Approx(64e6 + 100 * 1000.0 + voxels));
+}
