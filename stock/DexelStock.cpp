@@ -288,6 +288,29 @@ DexelStock DexelStock::box(const Box3& b, double spacing) {
   return s;
 }
 
+DexelStock DexelStock::fromColumns(double x0, double y0, double spacing, int nx, int ny,
+                                   std::vector<std::vector<Interval>> rays) {
+  if (nx <= 0 || ny <= 0 ||
+      rays.size() != static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny))
+    throw ParameterError("dexel columns: expected " + std::to_string(nx) + " x " +
+                         std::to_string(ny) + " rays, found " + std::to_string(rays.size()));
+  Box3 b;
+  b.min = {x0, y0, 1e300};
+  b.max = {x0 + nx * spacing, y0 + ny * spacing, -1e300};
+  for (const auto& r : rays)
+    if (!r.empty()) {
+      b.min.z() = std::min(b.min.z(), r.front().z0);
+      b.max.z() = std::max(b.max.z(), r.back().z1);
+    }
+  if (!(b.max.z() > b.min.z())) throw ParameterError("the stock holds no material");
+  DexelStock s(b, spacing);
+  s.nx_ = nx;  // (the box's rounding could add a column)
+  s.ny_ = ny;
+  s.weight_.assign(rays.size(), 1.0);
+  s.rays_ = std::move(rays);
+  return s;
+}
+
 DexelStock DexelStock::fromMesh(const std::string& path, double spacing) {
   const TriangleMesh mesh = readMesh(path);
   if (mesh.triangles.empty()) throw Error("'" + path + "' holds no triangles");

@@ -918,6 +918,424 @@ VoxelStock VoxelStock::fromMesh(const std::string& path, double h) {
   return VoxelStock(std::move(impl));
 }
 
+namespace {
+
+/// stock.vdb keeps each partial voxel's planes (so that a later run goes on from them as this
+/// one would), in two Vec3s grids "planes_0" and "planes_1": a plane {u : n . u <= a} (u in
+/// voxel sizes from the voxel's centre) as n (a + 2) (a lies within +-0.87 where a plane cuts
+/// the cube), none as 0, and the first as n (a + 6) when the material is inside either plane
+/// instead of both.
+/// The outward normal of the material at voxel c from its neighbours' fractions (central
+/// differences), zero where they do not change.
+Eigen::Vector3d fractionNormal(const FloatGrid::ConstAccessor& acc, const Coord& c) {
+  Eigen::Vector3d g;
+  for (int a = 0; a < 3; ++a) {
+    Coord e(0);
+    e[a] = 1;
+    g[a] = static_cast<double>(acc.getValue(c - e)) - static_cast<double>(acc.getValue(c + e));
+  }
+  const double n = g.norm();
+  return n > 1e-9 ? Eigen::Vector3d(g / n) : Eigen::Vector3d::Zero();
+}
+
+openvdb::Vec3s encodePlane(const HalfSpace& q, bool united) {
+  if (q.n.squaredNorm() == 0.0) return openvdb::Vec3s(0.0f);
+  const double r = std::clamp(q.a, -1.9, 1.9) + (united ? 6.0 : 2.0);
+  return openvdb::Vec3s(static_cast<float>(q.n.x() * r), static_cast<float>(q.n.y() * r),
+                        static_cast<float>(q.n.z() * r));
+}
+
+HalfSpace decodePlane(const openvdb::Vec3s& v, bool* united = nullptr) {
+  const double r = static_cast<double>(v.length());
+  if (united) *united = r > 4.0;
+  if (!(r > 0.5)) return HalfSpace{};
+  const Eigen::Vector3d n(static_cast<double>(v.x()) / r, static_cast<double>(v.y()) / r,
+                          static_cast<double>(v.z()) / r);
+  return HalfSpace{n, r - (r > 4.0 ? 6.0 : 2.0)};
+}
+
+}  // namespace
+
+namespace {
+
+/// Grid "stock" of stock.vdb at `path`, checked: fractions 0 to 1 on a uniform grid whose
+/// index axes are the world's (a translation allowed).
+struct StockFile {
+  FloatGrid::Ptr fractions;
+  /// The partial voxels' planes (both null for a file written without them).
+  openvdb::Vec3SGrid::Ptr planes[2];
+};
+
+StockFile readStockGrid(const std::string& path) {
+  initVdb();
+  openvdb::Vec3SGrid::Ptr planes[2];
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw Error("cannot read stock '" + path +
+                "': " + (std::filesystem::exists(path, ec) ? "not a file" : "no such file"));
+  openvdb::GridBase::Ptr base;
+  std::string names;
+  try {
+    openvdb::io::File file(path);
+    file.open(false);
+    for (auto it = file.beginName(); it != file.endName(); ++it)
+      names += (names.empty() ? "" : ", ") + it.gridName();
+    if (file.hasGrid("stock")) base = file.readGrid("stock");
+    if (base && file.hasGrid("planes_0") && file.hasGrid("planes_1"))
+      for (int i = 0; i < 2; ++i)
+        planes[i] =
+            openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid("planes_" + std::to_string(i)));
+    file.close();
+  } catch (const openvdb::Exception& e) {
+    throw Error("cannot read stock '" + path + "' as an OpenVDB file: " + e.what());
+  }
+  if (!base)
+    throw ParameterError("stock '" + path +
+                         "' has no grid named 'stock' (the material fractions an engage run "
+                         "writes in stock.vdb); its grids: " +
+                         (names.empty() ? std::string("none") : names));
+  FloatGrid::Ptr grid = openvdb::gridPtrCast<FloatGrid>(base);
+  if (!grid)
+    throw ParameterError("grid 'stock' of '" + path + "' holds " + base->valueType() +
+                         " values, not float material fractions");
+  const openvdb::math::Transform& xf = grid->transform();
+  const openvdb::Vec3d o = xf.indexToWorld(openvdb::Vec3d(0.0));
+  const double h0 = xf.voxelSize()[0];
+  bool axes = xf.isLinear() && std::isfinite(h0) && h0 > 0.0;
+  for (int a = 0; a < 3 && axes; ++a) {
+    openvdb::Vec3d e(0.0);
+    e[a] = 1.0;
+    const openvdb::Vec3d d = xf.indexToWorld(e) - o;
+    for (int b = 0; b < 3; ++b)
+      axes = axes && std::abs(d[b] - (a == b ? h0 : 0.0)) <= 1e-9 * h0;
+  }
+  if (!axes)
+    throw ParameterError("grid 'stock' of '" + path +
+                         "' is not on cubic voxels along the world's axes (rotated, sheared or "
+                         "of unequal sizes)");
+  if (std::abs(grid->background()) > 1e-6f)
+    throw ParameterError("grid 'stock' of '" + path + "' has background " +
+                         num(grid->background()) + ", not 0 (air): not material fractions");
+  for (auto it = grid->cbeginValueOn(); it; ++it) {
+    const float v = *it;
+    if (!(v >= -1e-6f && v <= 1.0f + 1e-6f)) {
+      const Coord c = it.getCoord();
+      throw ParameterError("grid 'stock' of '" + path + "' holds " + num(v) + " at voxel (" +
+                           std::to_string(c.x()) + ", " + std::to_string(c.y()) + ", " +
+                           std::to_string(c.z()) + "): not a material fraction (0 to 1)");
+    }
+  }
+  StockFile f;
+  f.fractions = grid;
+  // Planes on another grid than the fractions' are not used.
+  if (planes[0] && planes[1] && planes[0]->transform() == xf && planes[1]->transform() == xf) {
+    f.planes[0] = planes[0];
+    f.planes[1] = planes[1];
+  }
+  return f;
+}
+
+/// The planes of voxel c of a stock file: from its planes grids, else (a file without them) the
+/// plane across the fractions' gradient that holds fraction m. Returns how many (0: none).
+int filePlanes(const FloatGrid::ConstAccessor& acc, const openvdb::Vec3SGrid::ConstAccessor* planes,
+               const Coord& c, double m, HalfSpace q[2], bool& united) {
+  united = false;
+  if (planes) {
+    q[0] = decodePlane(planes[0].getValue(c), &united);
+    q[1] = decodePlane(planes[1].getValue(c));
+    if (q[0].n.squaredNorm() > 0.0 || q[1].n.squaredNorm() > 0.0) return 2;
+  }
+  const Eigen::Vector3d n = fractionNormal(acc, c);
+  if (n.squaredNorm() == 0.0) return 0;
+  q[0] = planeLeaving(n, m);
+  q[1] = HalfSpace{};
+  return 1;
+}
+
+/// Tiles of a value below 1 become voxels: the removal takes tiles for whole material.
+void partialTilesToVoxels(FloatGrid& g) {
+  std::vector<std::pair<CoordBBox, float>> tiles;
+  for (auto it = g.cbeginValueOn(); it; ++it)
+    if (!it.isVoxelValue() && *it < 1.0f) tiles.emplace_back(it.getBoundingBox(), *it);
+  auto acc = g.getAccessor();
+  for (const auto& [box, v] : tiles)
+    for (auto c = box.begin(); c; ++c)
+      acc.setValue(*c, v);
+}
+
+/// A fraction within this of 0 or 1 after resampling is taken as 0 or 1 (float sums of
+/// shares), so regions of material stay tiles and are not partial voxels by rounding.
+constexpr double kResampleSnap = 1e-6;
+
+/// The fractions of `grid` on voxels of size h centred at multiples of h: a copy when the
+/// grid is already so, else resampled by overlap. Each old voxel gives each new voxel it
+/// overlaps the material inside their common box: all of it for a voxel of material; for a
+/// partial voxel the part on the material's side of the plane across its fractions' gradient
+/// that holds its fraction (clipped exactly, CubeClip.h). So the volume is kept, and a face
+/// between two old voxels stays there: spreading a partial voxel's material evenly put a
+/// top face's half-full voxels' material above the face, where rapids then met it.
+/// Whether `grid` has voxels of size h centred at multiples of h.
+bool onGrid(const FloatGrid& grid, double h) {
+  const double h0 = grid.transform().voxelSize()[0];
+  const openvdb::Vec3d o = grid.transform().indexToWorld(openvdb::Vec3d(0.0));
+  bool same = std::abs(h0 - h) <= 1e-9 * h;
+  for (int a = 0; a < 3; ++a)
+    same = same && std::abs(o[a]) <= 1e-9 * h;
+  return same;
+}
+
+FloatGrid::Ptr resampledFractions(const StockFile& file, double h) {
+  const FloatGrid& grid = *file.fractions;
+  const double h0 = grid.transform().voxelSize()[0];
+  const openvdb::Vec3d o = grid.transform().indexToWorld(openvdb::Vec3d(0.0));
+  auto make = [&] {
+    FloatGrid::Ptr g = FloatGrid::create(0.0f);
+    g->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    g->setName("stock");
+    g->setGridClass(openvdb::GRID_FOG_VOLUME);
+    return g;
+  };
+  const CoordBBox bb = grid.evalActiveVoxelBoundingBox();
+  if (bb.empty()) return make();
+  Box3 world;
+  for (int a = 0; a < 3; ++a) {
+    world.min[a] = o[a] + (bb.min()[a] - 0.5) * h0;
+    world.max[a] = o[a] + (bb.max()[a] + 0.5) * h0;
+  }
+  checkMemory(world, h);
+  if (onGrid(grid, h)) {
+    FloatGrid::Ptr g = make();
+    g->setTree(grid.tree().copy());
+    partialTilesToVoxels(*g);
+    return g;
+  }
+  // The new voxels over the old grid's bounds, dense (x fastest), summed in doubles.
+  int lo[3], dim[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = static_cast<int>(std::floor(world.min[a] / h + 0.5));
+    dim[a] = static_cast<int>(std::floor(world.max[a] / h + 0.5)) - lo[a] + 1;
+  }
+  std::vector<double> sum(static_cast<std::size_t>(dim[0]) * static_cast<std::size_t>(dim[1]) *
+                          static_cast<std::size_t>(dim[2]));
+  const double scale = (h0 / h) * (h0 / h) * (h0 / h);  // an old voxel in new voxels
+  // Layer by layer of new voxels (each summed by one thread, in one order: the same result for
+  // any thread count), from the old voxels that overlap it.
+  tbb::parallel_for(0, dim[2], [&](int layer) {
+    auto acc = grid.getConstAccessor();
+    std::vector<openvdb::Vec3SGrid::ConstAccessor> planeAcc;
+    if (file.planes[0])
+      for (int i = 0; i < 2; ++i)
+        planeAcc.push_back(file.planes[i]->getConstAccessor());
+    const openvdb::Vec3SGrid::ConstAccessor* planes = planeAcc.empty() ? nullptr : planeAcc.data();
+    const int z = lo[2] + layer;
+    const int k0 =
+        std::max(bb.min().z(), static_cast<int>(std::floor(((z - 0.5) * h - o[2]) / h0 + 0.5)));
+    const int k1 =
+        std::min(bb.max().z(), static_cast<int>(std::floor(((z + 0.5) * h - o[2]) / h0 + 0.5)));
+    for (int k = k0; k <= k1; ++k)
+      for (int j = bb.min().y(); j <= bb.max().y(); ++j)
+        for (int i = bb.min().x(); i <= bb.max().x(); ++i) {
+          const Coord c(i, j, k);
+          const double m = static_cast<double>(acc.getValue(c));
+          if (!(m > 0.0)) continue;
+          const Eigen::Vector3d centre(o[0] + i * h0, o[1] + j * h0, o[2] + k * h0);
+          // A partial voxel's material: inside its planes (both, or either when united),
+          // scaled to its fraction (the planes hold it to within kPlanesAgree).
+          HalfSpace q[2];
+          bool united = false;
+          const int count = m < 1.0 ? filePlanes(acc, planes, c, m, q, united) : 0;
+          auto inside = [&](const HalfSpace* clip, int clips) {
+            HalfSpace all[8];
+            auto with = [&](std::initializer_list<int> which) {
+              int n = 0;
+              for (int w : which)
+                all[n++] = q[w];
+              for (int t = 0; t < clips; ++t)
+                all[n++] = clip[t];
+              return cubeFraction(all, n);
+            };
+            return united ? with({0}) + with({1}) - with({0, 1}) : with({0, 1});
+          };
+          double factor = 0.0;
+          if (count > 0) {
+            const double held = inside(nullptr, 0);
+            if (held > 0.0 && std::abs(held - m) <= kPlanesAgree) factor = m / held;
+          }
+          int first[2], last[2];
+          for (int a = 0; a < 2; ++a) {
+            first[a] = static_cast<int>(std::floor((centre[a] - 0.5 * h0) / h + 0.5));
+            last[a] = static_cast<int>(std::floor((centre[a] + 0.5 * h0) / h + 0.5));
+          }
+          for (int y = first[1]; y <= last[1]; ++y)
+            for (int x = first[0]; x <= last[0]; ++x) {
+              const int n[3] = {x, y, z};
+              // The new voxel's box in the old voxel's unit cube.
+              double u0[3], u1[3], box = 1.0;
+              for (int a = 0; a < 3; ++a) {
+                u0[a] = std::max(-0.5, ((n[a] - 0.5) * h - centre[a]) / h0);
+                u1[a] = std::min(0.5, ((n[a] + 0.5) * h - centre[a]) / h0);
+                box *= std::max(0.0, u1[a] - u0[a]);
+              }
+              if (!(box > 0.0)) continue;
+              double share = m * box;
+              if (factor > 0.0) {
+                HalfSpace clip[6];
+                int clips = 0;
+                for (int a = 0; a < 3; ++a) {
+                  const Eigen::Vector3d e = Eigen::Vector3d::Unit(a);
+                  if (u0[a] > -0.5) clip[clips++] = HalfSpace{-e, -u0[a]};
+                  if (u1[a] < 0.5) clip[clips++] = HalfSpace{e, u1[a]};
+                }
+                share = inside(clip, clips) * factor;
+              }
+              sum[(static_cast<std::size_t>(layer) * static_cast<std::size_t>(dim[1]) +
+                   static_cast<std::size_t>(y - lo[1])) *
+                      static_cast<std::size_t>(dim[0]) +
+                  static_cast<std::size_t>(x - lo[0])] += share * scale;
+            }
+        }
+  });
+  FloatGrid::Ptr g = make();
+  auto acc = g->getAccessor();
+  for (int z = 0; z < dim[2]; ++z)
+    for (int y = 0; y < dim[1]; ++y)
+      for (int x = 0; x < dim[0]; ++x) {
+        double v = sum[(static_cast<std::size_t>(z) * static_cast<std::size_t>(dim[1]) +
+                        static_cast<std::size_t>(y)) *
+                           static_cast<std::size_t>(dim[0]) +
+                       static_cast<std::size_t>(x)];
+        if (v < kResampleSnap) continue;
+        if (v > 1.0 - kResampleSnap) v = 1.0;
+        acc.setValue(Coord(lo[0] + x, lo[1] + y, lo[2] + z), static_cast<float>(v));
+      }
+  g->tree().prune();
+  partialTilesToVoxels(*g);
+  return g;
+}
+
+}  // namespace
+
+VoxelStock VoxelStock::fromVdb(const std::string& path, double h) {
+  const StockFile file = readStockGrid(path);
+  auto impl = std::make_unique<Impl>();
+  impl->h = h;
+  impl->grid = resampledFractions(file, h);
+  if (impl->grid->activeVoxelCount() == 0)
+    throw ParameterError("stock '" + path + "' holds no material");
+  // Each partial voxel: on the file's own grid, the planes the file keeps. Resampled, the
+  // planes of the old partial voxel that overlaps it most, moved into its frame, where they
+  // hold its fraction (to kPlanesAgree: a flat face stays flat across the new grid); else
+  // the plane across the fractions' gradient that holds its fraction. (The gradient plane
+  // alone, at the stock box's edges, put material above its top face, which a rapid from
+  // the top then met.)
+  const bool same = onGrid(*file.fractions, h);
+  std::vector<openvdb::Vec3SGrid::ConstAccessor> planeAcc;
+  if (file.planes[0])
+    for (int i = 0; i < 2; ++i)
+      planeAcc.push_back(file.planes[i]->getConstAccessor());
+  const openvdb::Vec3SGrid::ConstAccessor* planes = planeAcc.empty() ? nullptr : planeAcc.data();
+  const FloatGrid::ConstAccessor oldAcc = file.fractions->getConstAccessor();
+  const double h0 = file.fractions->transform().voxelSize()[0];
+  const openvdb::Vec3d o = file.fractions->transform().indexToWorld(openvdb::Vec3d(0.0));
+  auto acc = impl->grid->getConstAccessor();
+  for (auto it = impl->grid->cbeginValueOn(); it; ++it) {
+    const double m = static_cast<double>(*it);
+    if (!it.isVoxelValue() || !(m < 1.0)) continue;
+    const Coord c = it.getCoord();
+    HalfSpace q[2];
+    bool united = false;
+    int count = 0;
+    if (same) {
+      count = filePlanes(acc, planes, c, m, q, united);
+    } else {
+      // The old partial voxel with the largest overlap.
+      const Eigen::Vector3d centre(c.x() * h, c.y() * h, c.z() * h);
+      Coord lo, hi;
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = static_cast<int>(std::floor((centre[a] - 0.5 * h - o[a]) / h0 + 0.5));
+        hi[a] = static_cast<int>(std::floor((centre[a] + 0.5 * h - o[a]) / h0 + 0.5));
+      }
+      double best = 0.0;
+      for (auto oc = CoordBBox(lo, hi).begin(); oc; ++oc) {
+        const double mo = static_cast<double>(oldAcc.getValue(*oc));
+        if (!(mo > 0.0 && mo < 1.0)) continue;
+        const Eigen::Vector3d oldCentre(o[0] + (*oc).x() * h0, o[1] + (*oc).y() * h0,
+                                        o[2] + (*oc).z() * h0);
+        double overlap = 1.0;
+        for (int a = 0; a < 3; ++a)
+          overlap *= std::max(0.0, std::min(centre[a] + 0.5 * h, oldCentre[a] + 0.5 * h0) -
+                                       std::max(centre[a] - 0.5 * h, oldCentre[a] - 0.5 * h0));
+        if (!(overlap > best)) continue;
+        HalfSpace oq[2];
+        bool ou = false;
+        if (filePlanes(oldAcc, planes, *oc, mo, oq, ou) == 0) continue;
+        // n . (x - old centre) <= a h0, with x = centre + u h.
+        HalfSpace moved[2];
+        for (int i = 0; i < 2; ++i)
+          moved[i] = oq[i].n.squaredNorm() == 0.0
+                         ? oq[i]
+                         : HalfSpace{oq[i].n, (oq[i].a * h0 - oq[i].n.dot(centre - oldCentre)) / h};
+        const double held =
+            ou ? cubeFraction(&moved[0], 1) + cubeFraction(&moved[1], 1) - cubeFraction(moved, 2)
+               : cubeFraction(moved, 2);
+        if (!(held > 0.0 && std::abs(held - m) <= kPlanesAgree)) continue;
+        best = overlap;
+        q[0] = moved[0];
+        q[1] = moved[1];
+        united = ou;
+        count = 2;
+      }
+      if (count == 0) count = filePlanes(acc, nullptr, c, m, q, united);
+    }
+    if (count == 0) continue;  // (the fraction rule for this one)
+    impl->planes[leafKey(c)].set(Leaf::coordToOffset(c), q[0], kStockFace, q[1], kStockFace,
+                                 std::numeric_limits<double>::quiet_NaN(), united);
+  }
+  return VoxelStock(std::move(impl));
+}
+
+DexelStock VoxelStock::dexelsFromVdb(const std::string& path, double h) {
+  const FloatGrid::Ptr grid = resampledFractions(readStockGrid(path), h);
+  const CoordBBox bb = grid->evalActiveVoxelBoundingBox();
+  if (bb.empty()) throw ParameterError("stock '" + path + "' holds no material");
+  const int nx = bb.dim().x(), ny = bb.dim().y();
+  std::vector<std::vector<DexelStock::Interval>> rays(static_cast<std::size_t>(nx) *
+                                                      static_cast<std::size_t>(ny));
+  tbb::parallel_for(0, ny, [&](int j) {
+    auto acc = grid->getConstAccessor();
+    for (int i = 0; i < nx; ++i) {
+      auto& ray = rays[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
+                       static_cast<std::size_t>(i)];
+      for (int k = bb.min().z(); k <= bb.max().z(); ++k) {
+        const Coord c(bb.min().x() + i, bb.min().y() + j, k);
+        const double m = static_cast<double>(acc.getValue(c));
+        if (!(m > 0.0)) continue;
+        double z0 = (k - 0.5) * h, z1 = (k + 0.5) * h, f = 1.0;
+        if (m < 1.0) {
+          // A floor or a top (fractions changing mostly along z) is a shorter piece of the
+          // column, on the side of the material; a wall keeps the piece at its share.
+          const Eigen::Vector3d n = fractionNormal(acc, c);
+          if (std::abs(n.z()) >= n.head<2>().norm() && n.z() != 0.0) {
+            if (n.z() > 0.0)
+              z1 = z0 + m * h;
+            else
+              z0 = z1 - m * h;
+          } else {
+            f = m;
+          }
+        }
+        if (!ray.empty() && std::abs(ray.back().z1 - z0) <= 1e-12 * h &&
+            std::abs(ray.back().f - f) <= 1e-9)
+          ray.back().z1 = z1;
+        else
+          ray.push_back({z0, z1, f});
+      }
+    }
+  });
+  return DexelStock::fromColumns((bb.min().x() - 0.5) * h, (bb.min().y() - 0.5) * h, h, nx, ny,
+                                 std::move(rays));
+}
+
 double VoxelStock::voxelSize() const {
   return impl_->h;
 }
@@ -1186,7 +1604,36 @@ void VoxelStock::writeStockVdb(const std::string& path) const {
   openvdb::tools::pruneLevelSet(surface->tree());
   surface->setName("surface");
   surface->setGridClass(openvdb::GRID_LEVEL_SET);
-  writeVdb(path, openvdb::GridPtrVec{impl_->grid, surface});
+  // The partial voxels' planes (or the stock box's faces), for a run that goes on from here.
+  openvdb::Vec3SGrid::Ptr planes[2];
+  for (int i = 0; i < 2; ++i) {
+    planes[i] = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    planes[i]->setTransform(grid.transform().copy());
+    planes[i]->setName("planes_" + std::to_string(i));
+    planes[i]->setGridClass(openvdb::GRID_UNKNOWN);
+  }
+  {
+    auto p0 = planes[0]->getAccessor();
+    auto p1 = planes[1]->getAccessor();
+    for (auto it = grid.cbeginValueOn(); it; ++it) {
+      const double m = static_cast<double>(*it);
+      if (!it.isVoxelValue() || !(m < 1.0)) continue;
+      const Coord c = it.getCoord();
+      const auto found = impl_->planes.find(leafKey(c));
+      HalfSpace q[2];
+      int made[2];
+      double held = 0.0;
+      bool united = false;
+      if (found == impl_->planes.end() ||
+          found->second.get(Leaf::coordToOffset(c), q, made, held, united) == 0) {
+        if (!impl_->box) continue;
+        boxFaces(*impl_->box, Eigen::Vector3d(c.x() * h, c.y() * h, c.z() * h), h, q);
+      }
+      p0.setValue(c, encodePlane(q[0], united));
+      p1.setValue(c, encodePlane(q[1], false));
+    }
+  }
+  writeVdb(path, openvdb::GridPtrVec{impl_->grid, surface, planes[0], planes[1]});
 }
 
 void VoxelStock::writeRemovedVdb(const std::string& path) const {

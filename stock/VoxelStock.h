@@ -48,6 +48,18 @@ class VoxelStock : public Stock {
   /// Error for a missing or unreadable file, ParameterError for an open mesh (naming the
   /// number of boundary edges) or a voxel size that would not fit in memory.
   static VoxelStock fromMesh(const std::string& path, double voxelSize);
+  /// The stock of an earlier run: grid "stock" (material fractions) of a stock.vdb, on voxels
+  /// of size h. A grid of another voxel size or offset is resampled by overlap (each old voxel's
+  /// material shared among the new voxels it overlaps: the volume is kept). Partial voxels get
+  /// the plane normal to the fractions' gradient that holds their fraction (the planes of the
+  /// earlier run are not in the file). Throws Error for a missing or unreadable file,
+  /// ParameterError for a file without a float grid "stock" of fractions 0 to 1 on a uniform,
+  /// unrotated grid, or a voxel size that would not fit in memory.
+  static VoxelStock fromVdb(const std::string& path, double voxelSize);
+  /// The same stock as dexels of spacing h: each column of the resampled voxels becomes a ray;
+  /// a partial voxel whose fractions change mostly along z is a shorter piece of the column
+  /// (a floor or a top), otherwise the whole piece with its fraction as the column's share.
+  static DexelStock dexelsFromVdb(const std::string& path, double spacing);
   /// The material of a dexel stock as volume fractions on voxels of its ray spacing (for
   /// stock.vdb and stock.stl of dexel runs): each voxel gets the share of the columns it
   /// overlaps. The volume is kept exactly (up to 32-bit floats).

@@ -57,12 +57,17 @@ double plainNumber(const std::string& text, const std::string& message) {
   }
 }
 
-/// box:X0,Y0,Z0,X1,Y1,Z1 with bare numbers in `sys`; a mesh file otherwise.
+/// box:X0,Y0,Z0,X1,Y1,Z1 with bare numbers in `sys`; a .vdb an earlier run's stock; a mesh
+/// file otherwise.
 StockSpec parseStock(const std::string& text, UnitSystem sys) {
   StockSpec s;
   s.text = text;
   if (text.rfind("box:", 0) != 0) {
-    s.mesh = text;
+    const std::string ext = std::filesystem::path(text).extension().string();
+    if (ext == ".vdb" || ext == ".VDB")
+      s.vdb = text;
+    else
+      s.mesh = text;
     return s;
   }
   std::vector<double> v;

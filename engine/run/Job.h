@@ -27,11 +27,13 @@ enum class StockModel { Voxel, Dexel };
 /// "voxel" or "dexel".
 const char* stockModelName(StockModel model);
 
-/// The stock of a job: none (schedule --model analytic), a box (mm) or a closed mesh file (mm).
+/// The stock of a job: none (schedule --model analytic), a box (mm), a closed mesh file (mm)
+/// or the stock.vdb of an earlier run.
 struct StockSpec {
   std::string text;         ///< as typed ("" for none), shown in summary.json
   std::optional<Box3> box;  ///< a box:X0,Y0,Z0,X1,Y1,Z1, ordered corners, mm
-  std::string mesh;         ///< a mesh file, when not a box
+  std::string mesh;         ///< a mesh file, when not a box or a .vdb
+  std::string vdb;          ///< a stock.vdb of an earlier run (its grid "stock")
   bool none() const { return text.empty(); }
 };
 
@@ -71,6 +73,8 @@ struct Job {
   /// report.html without 3D view); summary
   /// (summary.json, the re-fed program): a batch of ten thousand programs fits a quota.
   enum class Outputs { All, Tables, Summary } outputs = Outputs::All;
+  /// Write stock.vdb whatever the outputs (a later batch job takes it as its stock).
+  bool keepStock = false;
   bool quiet = false;  ///< no progress on the terminal
   /// Write report.html (outputs all and tables; with all it has the 3D view).
   bool report = true;

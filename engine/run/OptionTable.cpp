@@ -80,8 +80,8 @@ std::vector<OptionInfo> makeTable() {
             "--tool's holder from its face up, segments DIAMETERxHEIGHT or "
             "LOWER-UPPERxHEIGHT, e.g. 22x10,28-40x30 (needs --stickout)"),
       plain("stock", K::Text, G::Stock, "",
-            "box:X0,Y0,Z0,X1,Y1,Z1 (program units) or a closed STL/OBJ/PLY mesh (mm); schedule "
-            "--model analytic runs without one"),
+            "box:X0,Y0,Z0,X1,Y1,Z1 (program units), a closed STL/OBJ/PLY mesh (mm) or an earlier "
+            "run's stock.vdb; schedule --model analytic runs without one"),
       choice("stock-model", G::Stock, {"voxel", "dexel"}, "voxel",
              "voxel (volume fractions) or dexel (vertical rays); --voxel sets the ray spacing"),
       quantity("voxel", G::Simulation, D::Length, "voxel size (default: cutter diameter / 20)"),

@@ -23,6 +23,10 @@ std::unique_ptr<Stock> makeStock(const StockSpec& spec, StockModel model, double
     if (dexel) return std::make_unique<DexelStock>(DexelStock::box(*spec.box, h));
     return std::make_unique<VoxelStock>(VoxelStock::box(*spec.box, h));
   }
+  if (!spec.vdb.empty()) {
+    if (dexel) return std::make_unique<DexelStock>(VoxelStock::dexelsFromVdb(spec.vdb, h));
+    return std::make_unique<VoxelStock>(VoxelStock::fromVdb(spec.vdb, h));
+  }
   // Meshes are read in mm.
   if (dexel) return std::make_unique<DexelStock>(DexelStock::fromMesh(spec.mesh, h));
   return std::make_unique<VoxelStock>(VoxelStock::fromMesh(spec.mesh, h));

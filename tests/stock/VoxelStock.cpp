@@ -12,13 +12,18 @@
 #include "stock/VoxelStock.h"
 #include "cutters/CrossSection.h"
 #include "cutters/Error.h"
+#include "stock/DexelStock.h"
 #include "tests/stock/StockTestSupport.h"
 
 #include <catch2/catch.hpp>
 
 #include <tbb/global_control.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <vector>
 
 using namespace engage;
@@ -309,4 +314,107 @@ TEST_CASE("engagement of a slot and of a side cut", "[stock]") {
     r = side.remove(Sweep(c, line(a2 + k * 0.75 * kDir, a2 + (k + 1) * 0.75 * kDir), h));
   CHECK(r.radialWidth == Approx(3.0).margin(2 * h));
   CHECK(r.engagementRad * 180 / kPi == Approx(90.0).margin(20.0));
+}
+
+namespace {
+
+/// A file name in the temporary folder for this test run.
+std::string tempVdb(const std::string& name) {
+  return (std::filesystem::temp_directory_path() /
+          ("engage_" + std::to_string(::getpid()) + "_" + name))
+      .string();
+}
+
+}  // namespace
+
+TEST_CASE("a stock.vdb read back holds the volume it was written with, at any voxel size",
+          "[stock][vdb]") {
+  // A box off the grid: its shell voxels are partial. Written at h0 = 0.5, read at 0.5 (a
+  // copy), 0.3 and 0.7 (resampled by overlap, which keeps the material) and as dexels.
+  Box3 b;
+  b.min = {0.13, -1.07, -3.21};
+  b.max = {10.11, 5.5, 0.0};
+  const double boxVolume = 9.98 * 6.57 * 3.21;
+  const std::string path = tempVdb("box.vdb");
+  VoxelStock::box(b, 0.5).writeStockVdb(path);
+  // Fractions are 32-bit floats, resampled with double sums rounded to floats: 1e-5 relative
+  // covers their rounding (a voxel's fraction carries 6e-8; the shell is a few thousand).
+  CHECK(VoxelStock::fromVdb(path, 0.5).volume() == Approx(boxVolume).epsilon(1e-6));
+  for (double h : {0.3, 0.7}) {
+    INFO("h = " << h);
+    const VoxelStock v = VoxelStock::fromVdb(path, h);
+    CHECK(v.voxelSize() == h);
+    CHECK(v.volume() == Approx(boxVolume).epsilon(1e-5));
+    // The material spreads at most over the new voxels the old shell overlaps.
+    const Box3 r = v.bounds();
+    CHECK(r.min.x() >= b.min.x() - 0.5 - h);
+    CHECK(r.max.z() <= b.max.z() + 0.5 + h);
+    CHECK(r.max.z() >= b.max.z() - 1e-9);
+    const DexelStock d = VoxelStock::dexelsFromVdb(path, h);
+    CHECK(d.volume() == Approx(boxVolume).epsilon(1e-5));
+  }
+  std::filesystem::remove(path);
+}
+
+TEST_CASE("a cut continued from a stock.vdb removes what the same cut in one run removes",
+          "[stock][vdb]") {
+  // Rough a slot (flat D = 6, 2 mm deep, along X through a 40 mm block), write the stock, then
+  // finish it 0.3 mm deeper and 0.3 mm wider on one side, in the same stock and in stocks read
+  // from the file: as voxels of the same size, of another size, and as dexels. The finishing
+  // cut's closed form: the new section (6 x 2.3) less the old one inside it (5.7 x 2), times 40.
+  const double h = 0.3;
+  const AptCutter c = AptCutter::flat(6.0, 18.0);
+  Box3 b;
+  b.min = {0.0, 0.0, -10.0};
+  b.max = {40.0, 20.0, 0.0};
+  auto cut = [&](Stock& s, double y, double z) {
+    return s.remove(Sweep(c, line({-5.0, y, z}, {45.0, y, z}), s.resolution())).volume;
+  };
+  VoxelStock one = VoxelStock::box(b, h);
+  const double rough = cut(one, 10.0, -2.0);
+  CHECK(rough == Approx(6.0 * 2.0 * 40.0).epsilon(1e-4));  // (measured 2e-6 relative)
+  const std::string path = tempVdb("rough.vdb");
+  one.writeStockVdb(path);
+  const double finish = 40.0 * (6.0 * 2.3 - 5.7 * 2.0);  // 96 mm^3
+  const double inOne = cut(one, 10.3, -2.3);
+  VoxelStock same = VoxelStock::fromVdb(path, h);
+  VoxelStock finer = VoxelStock::fromVdb(path, 0.2);
+  DexelStock dexels = VoxelStock::dexelsFromVdb(path, h);
+  const double fromSame = cut(same, 10.3, -2.3), fromFiner = cut(finer, 10.3, -2.3),
+               fromDexels = cut(dexels, 10.3, -2.3);
+  INFO("one run " << inOne << ", from the file " << fromSame << " / " << fromFiner << " / "
+                  << fromDexels << " mm^3 against " << finish);
+  // The issue's bar: rough then finish from the file totals one run within 0.1 %.
+  CHECK(std::abs((rough + fromSame) - (rough + inOne)) < 1e-3 * (rough + inOne));
+  CHECK(std::abs((rough + fromFiner) - (rough + inOne)) < 1e-3 * (rough + inOne));
+  // Against the closed form, each finishing cut within 1 % (a 0.3 mm floor re-cut is a thin
+  // cut, where the voxels' known error is ~2 %, issue 18). Measured: one run -0.53 %, from the
+  // file -0.011 % (same voxels: the planes come back, but not which step made them, and the
+  // rule for a cut continuing the last step's plane is not applied), -0.0003 % (0.2 mm
+  // voxels), -0.03 % (dexels).
+  CHECK(fromSame == Approx(finish).epsilon(0.01));
+  CHECK(fromFiner == Approx(finish).epsilon(0.01));
+  CHECK(fromDexels == Approx(finish).epsilon(0.01));
+  std::filesystem::remove(path);
+}
+
+TEST_CASE("a stock.vdb that is not an engage stock is refused with its reason", "[stock][vdb]") {
+  const std::string missing = tempVdb("missing.vdb");
+  CHECK_THROWS_WITH(VoxelStock::fromVdb(missing, 0.3), Contains("no such file"));
+  const std::string text = tempVdb("text.vdb");
+  std::ofstream(text) << "not a grid\n";
+  CHECK_THROWS_WITH(VoxelStock::fromVdb(text, 0.3), Contains("not a VDB file"));
+  std::filesystem::remove(text);
+  // removed.vdb has grids, but not "stock".
+  Box3 b;
+  b.min = {0.0, 0.0, -2.0};
+  b.max = {4.0, 4.0, 0.0};
+  VoxelStock s = VoxelStock::box(b, 0.5);
+  s.captureRemoved(true);
+  s.remove(Sweep(AptCutter::flat(2.0, 6.0), line({-2, 2, -1}, {6, 2, -1}), 0.5));
+  const std::string removed = tempVdb("removed.vdb");
+  s.writeRemovedVdb(removed);
+  CHECK_THROWS_WITH(VoxelStock::fromVdb(removed, 0.5),
+                    Contains("has no grid named 'stock'") && Contains("removed, step"));
+  std::filesystem::remove(removed);
 }
