@@ -94,8 +94,9 @@ class VoxelStock : public Stock {
   double materialInside(const Sweep& sweep, double top) const override;
   std::vector<double> materialAt(const std::vector<Eigen::Vector3d>& points) const override;
 
-  /// Write stock.vdb: grid "stock" (material fraction) and grid "surface" (the stock's
-  /// surface as a narrow-band level set, negative inside, 3 voxels each side). Written to a
+  /// Write stock.vdb: grid "stock" (material fraction), grid "surface" (the stock's surface
+  /// as a narrow-band level set, negative inside, 3 voxels each side) and grids "planes_0",
+  /// "planes_1" (each partial voxel's planes, which fromVdb reads back). Written to a
   /// temporary name and renamed when complete. Throws Error on I/O failure.
   void writeStockVdb(const std::string& path) const;
   /// Write removed.vdb: grids "removed" (fraction removed), "step" (int32, first step) and

@@ -148,9 +148,10 @@ double parseMemory(const std::string& text) {
 }
 
 /// Run one job into DIR/jobs/NAME (through NAME.partial, renamed when complete) and return
-/// its record. A job's failure is its record; it never stops the batch.
+/// its record. A job's failure is its record; it never stops the batch. `blocked` non-empty:
+/// the job cannot run (its stock's job failed), and that is its record.
 ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::string& outputs,
-                    MemoryBudget& memory) {
+                    MemoryBudget& memory, const std::string& blocked) {
   const fs::path partial = jobs / (job.name + ".partial"), done = jobs / job.name;
   fs::remove_all(partial);
   fs::create_directories(partial);
@@ -166,7 +167,10 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     values["out"] = partial.string();
     values["quiet"] = "true";
     if (!outputs.empty() && !values.count("outputs")) values["outputs"] = outputs;
+    if (!blocked.empty()) throw Error(blocked);
+    if (!job.stockFrom.empty()) values["stock"] = (jobs / job.stockFrom / "stock.vdb").string();
     Job made = makeJob(job.command, values);
+    made.keepStock = job.feedsStock;
     const MemoryBudget::Ticket reserved(memory, memoryEstimate(made), job.name);
     const CompletedRun run = runIntoFolder(std::move(made));
     const RunResult& out = run.result;
@@ -249,6 +253,32 @@ ordered_json recordOf(const ManifestJob& job, const fs::path& jobs) {
     return r;
   } catch (const std::exception&) {
     return nullptr;  // unreadable: run it again
+  }
+}
+
+/// Wait until `source`, whose final stock a job takes, has finished: in this process (it is in
+/// `pending` until then) or in another (which holds its lock while it runs). Returns "" when
+/// its stock is there, else why the job cannot run.
+std::string awaitStock(const ManifestJob& source, const fs::path& jobs, std::mutex& mutex,
+                       std::condition_variable& finished, const std::set<std::string>& pending) {
+  {
+    std::unique_lock<std::mutex> lock(mutex);
+    finished.wait(lock, [&] { return !pending.count(source.name); });
+  }
+  const std::string why = "its stock is the final stock of job " + source.name + ", which ";
+  for (;;) {
+    ordered_json r = recordOf(source, jobs);
+    if (r.is_null()) {
+      const JobLock probe(jobs / ("." + source.name + ".lock"));
+      if (probe.acquired()) {
+        r = recordOf(source, jobs);  // (it may have ended between the two looks)
+        if (r.is_null()) return why + "has not run with its options (run its shard first)";
+      }
+    }
+    if (!r.is_null())
+      return r["status"] == "ok" ? "" : why + "failed: " + r["error"].get<std::string>();
+    if (stopRequested()) throw Interrupted();
+    std::this_thread::sleep_for(std::chrono::seconds(1));  // another process runs it
   }
 }
 
@@ -444,12 +474,13 @@ BatchReport runBatch(const BatchOptions& o) {
   OutputDirectory(out).keep();
   fs::create_directories(jobs);
 
-  // This shard's jobs: every N-th of the manifest, starting at i. Those with a record for
+  // This shard's jobs: every N-th of the manifest, starting at i (a job whose stock is an
+  // earlier job's goes with that job's shard). Those with a record for
   // the same options are done (failed ones too, unless --retry-failed).
   std::vector<const ManifestJob*> todo;
   std::size_t skipped = 0, mine = 0;
   for (const ManifestJob& j : all) {
-    if (!o.job.empty() ? j.name != o.job : j.index % shard.count != shard.index) continue;
+    if (!o.job.empty() ? j.name != o.job : j.group % shard.count != shard.index) continue;
     ++mine;
     const ordered_json r = recordOf(j, jobs);
     if (!r.is_null() && (r["status"] == "ok" || !o.retryFailed)) {
@@ -469,6 +500,17 @@ BatchReport runBatch(const BatchOptions& o) {
     };
     return size(a) > size(b);
   });
+  // A job whose stock is an earlier job's comes after it (workers take jobs in this order, so
+  // a job waits only for one that a worker already holds).
+  std::stable_sort(todo.begin(), todo.end(),
+                   [](const ManifestJob* a, const ManifestJob* b) { return a->depth < b->depth; });
+  std::map<std::string, const ManifestJob*> byName;
+  for (const ManifestJob& j : all)
+    byName[j.name] = &j;
+  std::set<std::string> pending;  // this process's jobs not finished yet
+  for (const ManifestJob* j : todo)
+    pending.insert(j->name);
+  std::condition_variable finishedOne;
 
   // Workers: jobs side by side, each with its share of the threads (results do not depend
   // on the thread count). Measured on 2 cores: 2 jobs side by side beat 1 job on 2 threads
@@ -519,22 +561,32 @@ BatchReport runBatch(const BatchOptions& o) {
         }();
         if (done) {
           std::lock_guard<std::mutex> lock(mutex);
+          pending.erase(todo[k]->name);
+          finishedOne.notify_all();
           ++elsewhere;
           std::fprintf(stderr, "batch: job %s runs or ran in another process: skipped here\n",
                        todo[k]->name.c_str());
           continue;
         }
         try {
-          arena.execute([&] { r = runOne(*todo[k], jobs, o.outputs, memory); });
+          const std::string blocked =
+              todo[k]->stockFrom.empty()
+                  ? std::string()
+                  : awaitStock(*byName.at(todo[k]->stockFrom), jobs, mutex, finishedOne, pending);
+          arena.execute([&] { r = runOne(*todo[k], jobs, o.outputs, memory, blocked); });
         } catch (...) {
           // A job's own failure is its record; this is the batch's (its record cannot be
           // written: a full disk, say). The batch stops and reports it, it does not crash.
           std::lock_guard<std::mutex> lock(mutex);
           if (!fatal) fatal = std::current_exception();
           next = todo.size();
+          pending.clear();  // (nobody waits for a job that will not run)
+          finishedOne.notify_all();
           return;
         }
         std::lock_guard<std::mutex> lock(mutex);
+        pending.erase(todo[k]->name);
+        finishedOne.notify_all();
         ++finished;
         if (r["status"] != "ok") ++failed;
         logJob(*todo[k], r);
@@ -570,7 +622,7 @@ BatchReport runBatch(const BatchOptions& o) {
   }
   // Failed jobs, this run's or earlier ones: their errors are in their records.
   for (const ManifestJob& j : all)
-    if (j.index % shard.count == shard.index) {
+    if (j.group % shard.count == shard.index) {
       const ordered_json r = recordOf(j, jobs);
       if (!r.is_null() && r["status"] != "ok")
         result.failures.push_back("job " + j.name + " failed: " + r["error"].get<std::string>());

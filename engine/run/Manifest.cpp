@@ -44,21 +44,31 @@ bool checkKey(const std::string& key, const json& value, JobCommand command, con
   return true;
 }
 
+/// FNV-1a (64 bits), continued over `n` bytes.
+std::uint64_t fnv1a(std::uint64_t h, const char* bytes, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= static_cast<unsigned char>(bytes[i]);
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+constexpr std::uint64_t kFnvStart = 1469598103934665603ull;
+
+std::string hex(std::uint64_t h) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
+  return text;
+}
+
 /// FNV-1a (64 bits) of a file's bytes as hex, or "unreadable".
 std::string contentHash(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return "unreadable";
-  std::uint64_t h = 1469598103934665603ull;
+  std::uint64_t h = kFnvStart;
   char buf[1 << 16];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
-    for (std::streamsize i = 0; i < in.gcount(); ++i) {
-      h ^= static_cast<unsigned char>(buf[i]);
-      h *= 1099511628211ull;
-    }
-  }
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-  return hex;
+  while (in.read(buf, sizeof buf) || in.gcount() > 0)
+    h = fnv1a(h, buf, static_cast<std::size_t>(in.gcount()));
+  return hex(h);
 }
 
 /// The options that name files: relative to the manifest, and their content part of the job
@@ -67,7 +77,7 @@ constexpr const char* kFileKeys[] = {"program", "stock", "tool-table", "tools", 
 
 /// A value of `key` that is not a file: a stock box, a bundled material's name.
 bool notAFile(const std::string& key, const std::string& v) {
-  if (key == "stock") return v.rfind("box:", 0) == 0;
+  if (key == "stock") return v.rfind("box:", 0) == 0 || v.rfind(kStockFromJob, 0) == 0;
   if (key == "material") return !materialIsFile(v);
   return false;
 }
@@ -170,6 +180,27 @@ std::vector<ManifestJob> readManifest(const std::string& manifest) {
     if (names.count(job.name))
       throw Error(where + ": the name \"" + job.name + "\" is taken by job " +
                   std::to_string(names[job.name] + 1) + "; give the jobs distinct \"name\"s");
+    job.group = i;
+    const auto stock = job.values.find("stock");
+    if (stock != job.values.end() && stock->second.rfind(kStockFromJob, 0) == 0) {
+      // The final stock of an earlier job: this job is that job's chain, and it is that job
+      // and its own options (the stock's content is not there before the earlier job runs).
+      const std::string from = stock->second.substr(std::string(kStockFromJob).size());
+      const auto up = names.find(from);
+      if (up == names.end())
+        throw Error(where + ": \"stock\": \"" + stock->second +
+                    "\" names no earlier job (a job's stock can be the final stock of a job "
+                    "before it in the manifest)");
+      ManifestJob& source = jobs[up->second];
+      source.feedsStock = true;
+      job.stockFrom = from;
+      job.group = source.group;
+      job.depth = source.depth + 1;
+      json spec = json::parse(job.specJson);
+      spec["content"]["stock"] =
+          hex(fnv1a(kFnvStart, source.specJson.data(), source.specJson.size()));
+      job.specJson = spec.dump();
+    }
     names[job.name] = i;
     jobs.push_back(std::move(job));
   }

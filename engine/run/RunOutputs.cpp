@@ -76,6 +76,8 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
     } catch (const Error& e) {
       std::fprintf(stderr, "engage: warning: plots not drawn: %s\n", e.what());
     }
+  } else if (result.job.keepStock) {
+    writeStockVdb(result, dir);
   }
   // The page names the other files: it comes last.
   if (result.job.report && which != Job::Outputs::Summary) {

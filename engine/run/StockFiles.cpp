@@ -21,4 +21,12 @@ std::size_t writeStockFiles(const RunResult& result, const std::filesystem::path
   return 0;
 }
 
+void writeStockVdb(const RunResult& result, const std::filesystem::path& dir) {
+  const std::string path = (dir / "stock.vdb").string();
+  if (const auto* voxels = dynamic_cast<const VoxelStock*>(result.stock.get()))
+    voxels->writeStockVdb(path);
+  else if (const auto* dexels = dynamic_cast<const DexelStock*>(result.stock.get()))
+    VoxelStock::fromDexels(*dexels).writeStockVdb(path);
+}
+
 }  // namespace engage
