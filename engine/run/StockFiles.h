@@ -1,9 +1,9 @@
 #pragma once
 /// \file StockFiles.h
 /// The stock files of a run: removed.vdb (grids "removed", "step", "mrr": the material each
-/// step took), stock.vdb (the final stock as volume fractions, a surface level set and the planes of the
-/// partial voxels, which `--stock stock.vdb` goes on from) and
-/// stock.stl (its surface as a mesh, mm). A dexel run writes the same files from its rays.
+/// step took), stock.vdb (the final stock as volume fractions, a surface level set and the planes
+/// of the partial voxels, which `--stock stock.vdb` goes on from) and stock.stl (its surface as a
+/// mesh, mm). A dexel run writes the same files from its rays.
 
 #include "engine/run/Pipeline.h"
 
