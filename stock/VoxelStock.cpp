@@ -920,11 +920,6 @@ VoxelStock VoxelStock::fromMesh(const std::string& path, double h) {
 
 namespace {
 
-/// stock.vdb keeps each partial voxel's planes (so that a later run goes on from them as this
-/// one would), in two Vec3s grids "planes_0" and "planes_1": a plane {u : n . u <= a} (u in
-/// voxel sizes from the voxel's centre) as n (a + 2) (a lies within +-0.87 where a plane cuts
-/// the cube), none as 0, and the first as n (a + 6) when the material is inside either plane
-/// instead of both.
 /// The outward normal of the material at voxel c from its neighbours' fractions (central
 /// differences), zero where they do not change.
 Eigen::Vector3d fractionNormal(const FloatGrid::ConstAccessor& acc, const Coord& c) {
@@ -938,6 +933,11 @@ Eigen::Vector3d fractionNormal(const FloatGrid::ConstAccessor& acc, const Coord&
   return n > 1e-9 ? Eigen::Vector3d(g / n) : Eigen::Vector3d::Zero();
 }
 
+/// stock.vdb keeps each partial voxel's planes (so that a later run goes on from them as this
+/// one would), in two Vec3s grids "planes_0" and "planes_1": a plane {u : n . u <= a} (u in
+/// voxel sizes from the voxel's centre) as n (a + 2) (a lies within +-0.87 where a plane cuts
+/// the cube), none as 0, and the first as n (a + 6) when the material is inside either plane
+/// instead of both.
 openvdb::Vec3s encodePlane(const HalfSpace& q, bool united) {
   if (q.n.squaredNorm() == 0.0) return openvdb::Vec3s(0.0f);
   const double r = std::clamp(q.a, -1.9, 1.9) + (united ? 6.0 : 2.0);
@@ -954,18 +954,15 @@ HalfSpace decodePlane(const openvdb::Vec3s& v, bool* united = nullptr) {
   return HalfSpace{n, r - (r > 4.0 ? 6.0 : 2.0)};
 }
 
-}  // namespace
-
-namespace {
-
-/// Grid "stock" of stock.vdb at `path`, checked: fractions 0 to 1 on a uniform grid whose
-/// index axes are the world's (a translation allowed).
+/// The grids of a stock.vdb that a run starts from.
 struct StockFile {
   FloatGrid::Ptr fractions;
   /// The partial voxels' planes (both null for a file written without them).
   openvdb::Vec3SGrid::Ptr planes[2];
 };
 
+/// Grid "stock" of stock.vdb at `path`, checked: fractions 0 to 1 on a uniform grid whose
+/// index axes are the world's (a translation allowed); and its planes, if it has them.
 StockFile readStockGrid(const std::string& path) {
   initVdb();
   openvdb::Vec3SGrid::Ptr planes[2];
@@ -1067,13 +1064,6 @@ void partialTilesToVoxels(FloatGrid& g) {
 /// shares), so regions of material stay tiles and are not partial voxels by rounding.
 constexpr double kResampleSnap = 1e-6;
 
-/// The fractions of `grid` on voxels of size h centred at multiples of h: a copy when the
-/// grid is already so, else resampled by overlap. Each old voxel gives each new voxel it
-/// overlaps the material inside their common box: all of it for a voxel of material; for a
-/// partial voxel the part on the material's side of the plane across its fractions' gradient
-/// that holds its fraction (clipped exactly, CubeClip.h). So the volume is kept, and a face
-/// between two old voxels stays there: spreading a partial voxel's material evenly put a
-/// top face's half-full voxels' material above the face, where rapids then met it.
 /// Whether `grid` has voxels of size h centred at multiples of h.
 bool onGrid(const FloatGrid& grid, double h) {
   const double h0 = grid.transform().voxelSize()[0];
@@ -1084,6 +1074,14 @@ bool onGrid(const FloatGrid& grid, double h) {
   return same;
 }
 
+/// The fractions of the file's grid on voxels of size h centred at multiples of h: a copy
+/// when the grid is already so, else resampled by overlap. Each old voxel gives each new voxel
+/// it overlaps the material inside their common box: all of it for a voxel of material; for a
+/// partial voxel the part inside its planes (filePlanes: the file's, else the plane across its
+/// fractions' gradient), clipped exactly (CubeClip.h) and scaled to its fraction. So the
+/// volume is kept, and a face between two old voxels stays there: spreading a partial voxel's
+/// material evenly put a top face's half-full voxels' material above the face, where rapids
+/// then met it.
 FloatGrid::Ptr resampledFractions(const StockFile& file, double h) {
   const FloatGrid& grid = *file.fractions;
   const double h0 = grid.transform().voxelSize()[0];
