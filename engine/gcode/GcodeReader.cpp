@@ -1,5 +1,7 @@
 #include "engine/gcode/GcodeReader.h"
 
+#include "engine/gcode/CutterComp.h"
+
 #include "engine/gcode/GcodeError.h"
 #include "engine/gcode/LatheCycle.h"
 #include "engine/gcode/LineParser.h"
@@ -287,6 +289,7 @@ class Interpreter final : public gcode::ParameterSource {
     files_.push_back(std::move(main));
     out_.files.push_back(files_[0]->name);
     execute();
+    comp_.flush();  // what compensation held back (the program ended with it on)
     out_.inch = inch_;
     return std::move(out_);
   }
@@ -411,14 +414,19 @@ class Interpreter final : public gcode::ParameterSource {
       std::istringstream words(line);
       std::string w;
       int tool = -1;
-      double length = 0.0;
+      double length = 0.0, diameter = 0.0;
       while (words >> w) {
         const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(w[0])));
         const double v = std::strtod(w.c_str() + 1, nullptr);
         if (c == 'T' && v >= 0.0 && v <= 1e6) tool = static_cast<int>(v);
         if (c == 'Z') length = v;
+        if (c == 'D') diameter = v;
       }
-      if (tool >= 0) toolLengths_[tool] = length * (options_.toolTableInch ? kInch : 1.0);
+      const double scale = options_.toolTableInch ? kInch : 1.0;
+      if (tool >= 0) {
+        toolLengths_[tool] = length * scale;
+        toolDiameters_[tool] = diameter * scale;
+      }
     }
   }
 
@@ -758,6 +766,11 @@ class Interpreter final : public gcode::ParameterSource {
         if (x == code) return c;
       return 1;
     }
+    int mColumn(int code) const {
+      for (const auto& [x, c] : m)
+        if (x == code) return c;
+      return 1;
+    }
   };
 
   Words collect(const Block& b) {
@@ -829,13 +842,6 @@ class Interpreter final : public gcode::ParameterSource {
     // Unsupported codes first, with a clear word.
     for (const auto& [code, column] : w.g) {
       switch (code) {
-        case 410:
-        case 411:
-        case 420:
-        case 421:
-          fail(column, "expected G40 (cutter compensation off), found " + codeName('G', code) +
-                           ": cutter radius compensation is not interpreted; post the program with "
-                           "compensation computed by the CAM system");
         case 760:
           fail(column,
                "expected a milling motion, found G76 (the lathe threading cycle is not "
@@ -876,7 +882,17 @@ class Interpreter final : public gcode::ParameterSource {
         fail(w.column('T'), "expected a tool number, found T" + num(w.get('T')));
       preparedTool_ = static_cast<int>(std::lround(w.get('T')));
     }
+    if (w.hasM(60) && comp_.on())
+      fail(w.mColumn(60),
+           "expected G40 before a tool change (M6), found cutter radius "
+           "compensation on");
     if (w.hasM(60)) tool_ = preparedTool_;
+    // A tool change makes LinuxCNC read the position back from the machine: after G40 that is
+    // the offset point the tool is at, not the programmed one.
+    if ((w.hasM(60) || w.hasM(610)) && physicalStart_) {
+      pos_ = *physicalStart_;
+      physicalStart_.reset();
+    }
     if (w.hasM(610)) {
       if (!w.has('Q')) fail(1, "expected a Q word (tool number) with M61, found none");
       tool_ = static_cast<int>(std::lround(w.get('Q')));
@@ -898,6 +914,8 @@ class Interpreter final : public gcode::ParameterSource {
         inch_ = inch;
       }
     }
+    if (const auto g = w.gIn(7)) compensation(*g, w);
+    if (comp_.on()) refuseWithCompensation(w);
     if (const auto g = w.gIn(8)) {
       // The spindle stays where it is: a longer tool puts the tip lower.
       const double previousLength = toolLength_;
@@ -1160,7 +1178,8 @@ class Interpreter final : public gcode::ParameterSource {
                   " moves in a program, found more");
     Move m;
     m.kind = kind;
-    m.start = pos_;
+    m.start = physicalStart_ ? *physicalStart_ : pos_;
+    physicalStart_.reset();
     m.plane = plane_;
     m.spindleRpm = spindleDirection_ * spindleSpeed_;
     m.tool = tool_;
@@ -1230,17 +1249,36 @@ class Interpreter final : public gcode::ParameterSource {
 
   void motion(const Words& w, bool explicitMotion, bool machineCoords) {
     const int column = explicitMotion ? w.gColumn(motion_) : 1;
+    if (comp_.on() && motion_ != 0 && motion_ != 10 && motion_ != 20 && motion_ != 30)
+      fail(column, "expected G0, G1, G2 or G3 with cutter radius compensation on, found " +
+                       codeName('G', motion_));
     switch (motion_) {
       case 0:
+        arcNotAllowed_ = false;
+        if (comp_.offsetting()) {
+          compensated(MoveKind::Rapid, target(w, false), 0.0, column);
+          return;
+        }
         emitLinear(MoveKind::Rapid, target(w, machineCoords));
         return;
       case 10: {
+        arcNotAllowed_ = false;
         const Vector3d end = target(w, machineCoords);
-        emitLinear(MoveKind::Line, end, feedFor((end - pos_).norm(), w, column));
+        const double feed = feedFor((end - pos_).norm(), w, column);
+        if (comp_.offsetting()) {
+          compensated(MoveKind::Line, end, feed, column);
+          return;
+        }
+        emitLinear(MoveKind::Line, end, feed);
         return;
       }
       case 20:
       case 30:
+        if (arcNotAllowed_)
+          fail(column,
+               "expected a straight move just after G40 (LinuxCNC ends compensation "
+               "with one), found " +
+                   codeName('G', motion_));
         arc(w, column);
         return;
       case 50:
@@ -1579,9 +1617,108 @@ class Interpreter final : public gcode::ParameterSource {
     m.center = pos_;
     m.center[ax.a] = ca;
     m.center[ax.b] = cb;
+    m.start = pos_;  // (the programmed start, also right after G40: arcs are refused there)
     pos_ = end;
     m.feed = feedFor(moveLength(m), w, column);
+    if (comp_.offsetting()) {
+      try {
+        comp_.arc(std::move(m));
+      } catch (const CompensationError& e) {
+        fail(column, e.what());
+      }
+      return;
+    }
     out_.moves.push_back(std::move(m));
+  }
+
+  /// A straight move while compensation offsets the path: it goes to `end` as programmed (in
+  /// pos_), the tool to its offset (CutterComp.h).
+  void compensated(MoveKind kind, const Vector3d& end, double feed, int column) {
+    Move m = base(kind);
+    m.start = pos_;
+    m.end = end;
+    m.feed = feed;
+    pos_ = end;
+    try {
+      comp_.straight(std::move(m));
+    } catch (const CompensationError& e) {
+      fail(column, e.what());
+    }
+  }
+
+  /// G40, G41, G41.1, G42, G42.1 (`code` x 10).
+  void compensation(int code, const Words& w) {
+    const int column = w.gColumn(code);
+    if (code == 400) {
+      const bool offsetting = comp_.offsetting();
+      Vector3d at;
+      try {
+        at = comp_.off();
+      } catch (const CompensationError& e) {
+        fail(column, e.what());
+      }
+      if (offsetting) {
+        physicalStart_ = at;
+        arcNotAllowed_ = true;
+      }
+      return;
+    }
+    if (plane_ == Plane::YZ)
+      fail(column,
+           "expected G17 or G18 (the XY or XZ plane) for cutter radius compensation, "
+           "found G19 (YZ)");
+    const auto side =
+        code == 410 || code == 411 ? CutterCompensation::Left : CutterCompensation::Right;
+    double diameter = 0.0;  // mm
+    if (code == 411 || code == 421) {
+      if (!w.has('D'))
+        fail(column, "expected a D word (the tool's diameter) with " + codeName('G', code) +
+                         ", found none");
+      if (w.has('L'))
+        fail(w.column('L'), "expected no L word (a lathe tool's orientation) with " +
+                                codeName('G', code) +
+                                ", found one (lathe tools are not "
+                                "interpreted)");
+      diameter = w.get('D') * unit();
+    } else {
+      int tool = tool_;
+      if (w.has('D')) {
+        const double d = w.get('D');
+        if (!(d >= 0.0) || std::abs(d - std::round(d)) >= 1e-4)
+          fail(w.column('D'),
+               "expected a tool number D with " + codeName('G', code) + ", found D" + num(d));
+        tool = static_cast<int>(std::lround(d));
+        if (!toolDiameters_.count(tool))
+          fail(w.column('D'),
+               "expected a tool of the tool table in D (its radius offsets the "
+               "path), found D" +
+                   std::to_string(tool) +
+                   (options_.toolTable.empty() ? " and no tool table (--tool-table)"
+                                               : ", which the table does not have"));
+      }
+      const auto it = toolDiameters_.find(tool);
+      diameter = it == toolDiameters_.end() ? 0.0 : it->second;
+    }
+    try {
+      comp_.on(side, diameter / 2.0, physicalStart_ ? *physicalStart_ : pos_, unit(), plane_);
+    } catch (const CompensationError& e) {
+      fail(column, e.what());
+    }
+  }
+
+  /// Codes LinuxCNC refuses while compensation is on.
+  void refuseWithCompensation(const Words& w) {
+    auto refuse = [&](int column, const std::string& what) {
+      fail(column, "expected G40 before " + what + ", found cutter radius compensation on");
+    };
+    if (const auto g = w.gIn(2)) refuse(w.gColumn(*g), "changing the plane");
+    if (const auto g = w.gIn(8))
+      refuse(w.gColumn(*g), "a tool length offset (" + codeName('G', *g) + ")");
+    if (const auto g = w.gIn(12)) refuse(w.gColumn(*g), "changing the coordinate system");
+    for (const auto& [code, c] : w.g)
+      if (code == 280 || code == 300 || code == 920 || code == 921 || code == 922 || code == 923 ||
+          code == 530 || code == 100)
+        refuse(c, codeName('G', code));
   }
 
   void spline(const Words& w, int column) {
@@ -1818,7 +1955,8 @@ class Interpreter final : public gcode::ParameterSource {
 
   const ReaderOptions& options_;
   mutable Toolpath out_;
-  const Block* currentBlock_ = nullptr;  ///< the line being executed
+  mutable std::optional<Vector3d> physicalStart_;  ///< see comp_
+  const Block* currentBlock_ = nullptr;            ///< the line being executed
   mutable bool blockRecorded_ = false;
   std::vector<std::unique_ptr<SourceFile>> files_;
   int file_ = 0;
@@ -1828,7 +1966,14 @@ class Interpreter final : public gcode::ParameterSource {
   std::vector<double> params_;
   std::unordered_map<std::string, double> globals_;
   std::unordered_map<std::string, double> topLocals_;
-  std::map<int, double> toolLengths_;  ///< mm
+  std::map<int, double> toolLengths_;    ///< mm
+  std::map<int, double> toolDiameters_;  ///< mm (the radius compensation uses)
+  /// G41/G42: the moves go through it while it is on (CutterComp.h).
+  CutterCompensation comp_{[this](Move m) { out_.moves.push_back(std::move(m)); }};
+  // physicalStart_ (declared above, with out_): where the next move starts when that is not
+  // pos_: after G40, the offset point the tool is at (pos_ is the programmed point, as
+  // LinuxCNC has it).
+  bool arcNotAllowed_ = false;  ///< the move after G40 must be straight
   std::optional<Modal> saved_;
   std::optional<LatheProfile> profile_;
 

@@ -18,9 +18,11 @@
 /// interpreter has it (#5061-#5063 = target, #5070 = 0); G33/G33.1 feed at K x S; G7 reads X
 /// words as diameters.
 ///
-/// Not supported, each a GcodeError naming the word: cutter compensation G41/G42, the lathe
-/// cycles G70-G72 and G76, boring cycles G86-G88, canned cycles outside G17, user M codes
-/// M100-M199.
+/// Cutter radius compensation G41, G41.1, G42, G42.1, G40 in G17 and G18, as LinuxCNC 2.9
+/// (CutterComp.h), with radii from the tool table's D column or the D word.
+///
+/// Not supported, each a GcodeError naming the word: the lathe cycles G70-G72 and G76,
+/// boring cycles G86-G88, canned cycles outside G17, user M codes M100-M199.
 
 #include "cutters/Error.h"
 #include "engine/gcode/Toolpath.h"

@@ -104,13 +104,19 @@ TEST_CASE("programs in the dialects users bring interpret as LinuxCNC's rs274 do
   ReaderOptions options;
   options.toolTable = data + "linuxcnc/tools.tbl";
   options.toolTableInch = true;  // rs274 without an INI file reads tool tables in inches
-  for (const char* name : {"fusion360_pocket.nc", "freecad_profile.ngc", "grbl_engrave.gcode",
-                           "inch_helix.ngc", "linuxcnc_features.ngc", "linuxcnc_probe_tap.ngc",
-                           "lathe_diameter_thread.ngc", "lathe_turning_cycles.ngc"}) {
-    INFO(name);
-    const std::string stem = std::string(name).substr(0, std::string(name).find('.'));
+  // compensation/: cutter radius compensation (G41/G42, G41.1/G42.1, G40) on both sides,
+  // outside and inside corners of lines and arcs, an arc entry, G91, the XZ plane.
+  for (const char* path :
+       {"dialects/fusion360_pocket.nc", "dialects/freecad_profile.ngc",
+        "dialects/grbl_engrave.gcode", "dialects/inch_helix.ngc", "dialects/linuxcnc_features.ngc",
+        "dialects/linuxcnc_probe_tap.ngc", "dialects/lathe_diameter_thread.ngc",
+        "dialects/lathe_turning_cycles.ngc", "compensation/profile_mm.ngc",
+        "compensation/entry_xz_mm.ngc"}) {
+    INFO(path);
+    const std::string name = std::string(path).substr(std::string(path).find('/') + 1);
+    const std::string stem = name.substr(0, name.find('.'));
     const auto expected = readGolden(golden + stem + ".csv");
-    const auto got = withoutZeroLength(readProgram(data + "dialects/" + name, options).moves);
+    const auto got = withoutZeroLength(readProgram(data + path, options).moves);
     REQUIRE(got.size() == expected.size());
     for (std::size_t i = 0; i < got.size(); ++i) {
       INFO("move " << i + 1 << " (line " << got[i].line << ")");
@@ -410,9 +416,76 @@ TEST_CASE("splines are flattened within 0.001 mm", "[gcode]") {
   checkPoint(m[1].end, 10, 0, 0);
 }
 
+TEST_CASE("cutter radius compensation: the tool a radius to the side, corners as LinuxCNC",
+          "[gcode][comp]") {
+  // Hand-computed: a 10 mm tool (G41.1 D10, r = 5) from the origin along +X to X20, then up.
+  {
+    INFO("left: the entry, then an inside corner");
+    const auto m = moves(
+        "G21 G17 F100\nG0 X0 Y0\nG41.1 D10 G1 X20 Y0\nG1 X20 Y20\n"
+        "G40 G1 X30 Y30\nM2\n");
+    REQUIRE(m.size() == 4);
+    // The entry ends a radius left of X20 Y0, moved back to where the two offset lines meet.
+    checkPoint(m[1].end, 15, 5, 0);
+    checkPoint(m[2].start, 15, 5, 0);
+    checkPoint(m[2].end, 15, 20, 0);
+    // After G40 the next move goes from the offset point to its programmed end.
+    checkPoint(m[3].start, 15, 20, 0);
+    checkPoint(m[3].end, 30, 30, 0);
+  }
+  {
+    INFO("right: an outside corner gets an arc about the programmed corner");
+    const auto m =
+        moves("G21 G17 F100\nG0 X0 Y0\nG42.1 D10 G1 X20 Y0\nG1 X20 Y20\nG40 G1 X30 Y30\n");
+    REQUIRE(m.size() == 5);
+    checkPoint(m[1].end, 20, -5, 0);
+    REQUIRE(m[2].kind == MoveKind::Arc);
+    checkPoint(m[2].start, 20, -5, 0);
+    checkPoint(m[2].end, 25, 0, 0);
+    checkPoint(m[2].center, 20, 0, 0);
+    CHECK(m[2].turns == 1);  // counter-clockwise around the corner
+    CHECK(m[2].line == 4);   // the corner belongs to the move that turns it
+    checkPoint(m[3].end, 25, 20, 0);
+  }
+  {
+    INFO("an inside arc: its radius less the tool's; a tool too big for it is refused");
+    // Left of a ccw arc of radius 20 about (20, 20) from (20, 0) to (40, 20): the tool on
+    // the inside, on a radius of 15.
+    const auto m = moves(
+        "G21 G17 F100\nG0 X0 Y0\nG41.1 D10 G1 X20 Y0\nG3 X40 Y20 I0 J20\n"
+        "G40 G1 X50 Y0\n");
+    REQUIRE(m.size() == 4);
+    checkPoint(m[1].end, 20, 5, 0);
+    REQUIRE(m[2].kind == MoveKind::Arc);
+    checkPoint(m[2].end, 35, 20, 0);
+    checkPoint(m[2].center, 20, 20, 0);
+    CHECK_THAT(errorOf("G21 G17 F100\nG0 X0 Y0\nG41.1 D10 G1 X20 Y0\nG3 X24 Y4 R4\n"),
+               Contains("test.ngc:4:1: tool radius not less than arc radius"));
+  }
+  // LinuxCNC's refusals, each at its line.
+  CHECK_THAT(errorOf("G21 F100\nG0 X0 Y0\nG41.1 D10 G1 X4 Y0\n"),
+             Contains("test.ngc:3:11: length of cutter compensation entry move is not greater "
+                      "than the tool radius"));
+  CHECK_THAT(errorOf("G21 F100\nG0 X0 Y0\nG41.1 D10 G1 X20 Y0\nG1 X20 Y2\nG1 X0 Y2\n"),
+             Contains("test.ngc:5:1: straight feed in concave corner cannot be reached by the "
+                      "tool without gouging"));
+  CHECK_THAT(errorOf("G21 F100\nG0 X0 Y0\nG41.1 D10 G1 X20 Y0\nG40 G2 X30 Y10 R10\n"),
+             Contains("test.ngc:4:5: expected a straight move just after G40"));
+  CHECK_THAT(errorOf("G21 F100\nG41.1 D10\nG42.1 D10\n"),
+             Contains("test.ngc:3:1: cannot turn cutter radius compensation on when it is on"));
+  CHECK_THAT(errorOf("G21 F100\nG19 G41.1 D10\n"),
+             Contains("expected G17 or G18 (the XY or XZ plane) for cutter radius compensation"));
+  CHECK_THAT(errorOf("G21 F100\nG41.1 D10 G1 X20\nT2 M6\n"),
+             Contains("test.ngc:3:4: expected G40 before a tool change (M6)"));
+  CHECK_THAT(errorOf("G21 F100\nG41 D3 G1 X20\n"),
+             Contains("expected a tool of the tool table in D") && Contains("found D3"));
+  CHECK_THAT(errorOf("G21 F100\nG41.1 G1 X20\n"),
+             Contains("expected a D word (the tool's diameter) with G41.1"));
+  CHECK_THAT(errorOf("G21 F100\nG41.1 D10 G1 X20\nG81 X30 Y0 Z-1 R1\n"),
+             Contains("expected G0, G1, G2 or G3 with cutter radius compensation on, found G81"));
+}
+
 TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]") {
-  CHECK_THAT(errorOf("G0 X0\nG41 G1 X10 F100\n"),
-             Contains("test.ngc:2:1: expected G40") && Contains("found G41"));
   CHECK_THAT(errorOf("G12 X1\n"), Contains("test.ngc:1:1: expected a known G code, found G12"));
   CHECK_THAT(errorOf("M123\n"), Contains("found M123 (user M codes"));
   CHECK_THAT(
