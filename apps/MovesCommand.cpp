@@ -1,6 +1,7 @@
 #include "apps/MovesCommand.h"
 
 #include "engine/gcode/GcodeReader.h"
+#include "engine/run/Machine.h"
 #include "engine/run/MovesTable.h"
 
 #include <cstdio>
@@ -14,6 +15,8 @@ struct MovesOptions {
   std::string program;
   std::string toolTable;
   std::string toolTableUnits = "mm";
+  std::string dialect = "linuxcnc";
+  std::string machine;
   bool blockDelete = false;
 };
 
@@ -22,6 +25,8 @@ int runMoves(const MovesOptions& o) {
   reader.toolTable = o.toolTable;
   reader.toolTableInch = o.toolTableUnits == "in";
   reader.blockDelete = o.blockDelete;
+  reader.dialect = dialectOf(o.dialect);
+  if (!o.machine.empty()) reader.machine = readMachine(o.machine);
   const Toolpath path = readProgram(o.program, reader);
   // The whole table is made before printing: an error leaves no partial output.
   const std::string out = movesTable(path);
@@ -41,6 +46,11 @@ void addMovesCommand(CLI::App& app, std::function<int()>& run) {
       ->check(CLI::IsMember({"mm", "in"}))
       ->capture_default_str();
   cmd->add_flag("--block-delete", o->blockDelete, "skip lines starting with '/'");
+  cmd->add_option("--dialect", o->dialect, "the controller: linuxcnc, fanuc or grbl")
+      ->check(CLI::IsMember({"linuxcnc", "fanuc", "grbl"}))
+      ->capture_default_str();
+  cmd->add_option("--machine", o->machine,
+                  "machine description (JSON): work offset, G28/G30, start, travel");
   cmd->callback([o, &run] { run = [o] { return runMoves(*o); }; });
 }
 

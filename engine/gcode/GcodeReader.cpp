@@ -179,6 +179,8 @@ int mGroup(int m) {
     case 2:
     case 30:
     case 60:
+    case 98:
+    case 99:
       return 4;
     case 6:
     case 61:
@@ -248,9 +250,12 @@ std::unique_ptr<SourceFile> makeSource(const std::string& name, const std::strin
   f->lines = splitLines(text);
   std::string label;
   std::string keyword;
-  for (std::size_t i = 0; i < f->lines.size(); ++i)
+  for (std::size_t i = 0; i < f->lines.size(); ++i) {
     if (gcode::peekOWord(f->lines[i], label, keyword))
       f->labels[label].emplace_back(static_cast<int>(i), keyword);
+    else if (gcode::peekProgramNumber(f->lines[i], label))  // an M98 subprogram's start
+      f->labels[label].emplace_back(static_cast<int>(i), "program");
+  }
   return f;
 }
 
@@ -283,6 +288,18 @@ class Interpreter final : public gcode::ParameterSource {
     if (!options.toolTable.empty()) readToolTable(options.toolTable);
     pos_ = options.start;
     tool_ = preparedTool_ = options.startTool;
+    startKnown_ = options.startKnown;
+    if (const auto& m = options.machine) {
+      // The interpreter runs in the machine's coordinates (mm at the start); run() moves the
+      // result into G54's frame.
+      for (int a = 0; a < 3; ++a) {
+        params_[5221 + static_cast<std::size_t>(a)] = m->workOffset[a];
+        params_[5161 + static_cast<std::size_t>(a)] = m->g28[a];
+        params_[5181 + static_cast<std::size_t>(a)] = m->g30[a];
+      }
+      pos_ = options.startKnown ? Vector3d(options.start + m->workOffset) : m->start;
+      startKnown_ = true;
+    }
   }
 
   Toolpath run(std::unique_ptr<SourceFile> main) {
@@ -291,7 +308,34 @@ class Interpreter final : public gcode::ParameterSource {
     execute();
     comp_.flush();  // what compensation held back (the program ended with it on)
     out_.inch = inch_;
+    if (options_.machine) toWorkFrame(*options_.machine);
     return std::move(out_);
+  }
+
+  /// With a machine: every move within its travel, then moved from the machine's coordinates
+  /// into G54's frame.
+  void toWorkFrame(const MachineSetup& m) {
+    for (const Move& move : out_.moves) {
+      if (!m.limited) break;
+      for (int a = 0; a < 3; ++a) {
+        const double v = move.end[a];
+        if (v >= m.travelMin[a] - 1e-6 && v <= m.travelMax[a] + 1e-6) continue;
+        auto mm = [](double x) { return num(x) + " mm"; };
+        throw GcodeError(out_.files[static_cast<std::size_t>(move.file)], move.line, 1,
+                         "expected moves within the travel of the machine (" + m.name + ": " +
+                             std::string(1, static_cast<char>('X' + a)) + " " + mm(m.travelMin[a]) +
+                             " to " + mm(m.travelMax[a]) + ", machine coordinates), found one to " +
+                             std::string(1, static_cast<char>('X' + a)) + " " + mm(v));
+      }
+    }
+    for (Move& move : out_.moves) {
+      move.start -= m.workOffset;
+      move.end -= m.workOffset;
+      move.workOffset -= m.workOffset;
+      if (move.kind == MoveKind::Arc) move.center -= m.workOffset;
+      for (Vector3d& p : move.points)
+        p -= m.workOffset;
+    }
   }
 
   // ParameterSource
@@ -368,6 +412,11 @@ class Interpreter final : public gcode::ParameterSource {
     int returnLine;
     std::array<double, 30> saved{};
     std::unordered_map<std::string, double> locals;
+    /// An M98 call (ends with M99, shares the caller's parameters): where its subprogram
+    /// starts and how many more times it runs (M98 L).
+    bool m98 = false;
+    int startFile = 0, startLine = 0;
+    long repeats = 0;
   };
 
   // ---------------------------------------------------------------- errors
@@ -442,7 +491,9 @@ class Interpreter final : public gcode::ParameterSource {
       if (line_ >= static_cast<int>(f.lines.size())) {
         if (!frames_.empty()) {
           line_ = static_cast<int>(f.lines.size()) - 1;
-          fail(1, "expected O-endsub closing the subroutine, found the end of the file");
+          fail(1, frames_.back().m98
+                      ? "expected M99 closing the subprogram, found the end of the file"
+                      : "expected O-endsub closing the subroutine, found the end of the file");
         }
         return;
       }
@@ -549,7 +600,8 @@ class Interpreter final : public gcode::ParameterSource {
     if (k == "sub") {
       line_ = findForward(o.label, line_, {"endsub"}, c, "O-endsub") + 1;
     } else if (k == "endsub" || k == "return") {
-      if (frames_.empty()) fail(c, "expected to be inside a called subroutine, found O-" + k);
+      if (frames_.empty() || frames_.back().m98)
+        fail(c, "expected to be inside a called subroutine, found O-" + k);
       if (!o.arguments.empty()) globals_["_value"] = o.arguments[0];
       Frame f = std::move(frames_.back());
       frames_.pop_back();
@@ -933,7 +985,7 @@ class Interpreter final : public gcode::ParameterSource {
       // shift applies only without one. Before the first move the position is an assumption
       // (the program origin), not where a homed spindle is: shifting it by a 40 mm tool
       // length would start the program 40 mm inside the stock and sweep a phantom plunge.
-      if (!w.hasM(60) && (options_.startKnown || !out_.moves.empty()))
+      if (!w.hasM(60) && (startKnown_ || !out_.moves.empty()))
         pos_.z() -= toolLength_ - previousLength;
     }
     if (const auto g = w.gIn(12)) {
@@ -1014,10 +1066,105 @@ class Interpreter final : public gcode::ParameterSource {
       motion(w, true, false);  // G5.2 opening a NURBS block without axis words
     }
 
-    // Stop codes.
+    // Stop codes, and M98/M99 subprograms (LinuxCNC 2.9, Fanuc and Haas posts), last.
     for (const auto& [code, c] : w.m)
       if (code == 20 || code == 300) return true;
+    if (w.hasM(980)) subprogramCall(w);
+    if (w.hasM(990)) {
+      if (frames_.empty()) return true;  // M99 in the main program ends it (as LinuxCNC)
+      subprogramReturn(w.mColumn(990));
+    }
     return false;
+  }
+
+  /// M98 P<program> [L<times>]: runs O<program> (in this program, or <program>.ngc beside
+  /// it) until its M99, L times. With --dialect fanuc and no L, a P of more than four digits
+  /// carries the count in its leading digits (P30001234: O1234 three times).
+  void subprogramCall(const Words& w) {
+    const int column = w.mColumn(980);
+    if (!w.has('P')) fail(column, "expected a P word (the program number) with M98, found none");
+    const double pv = w.get('P');
+    if (!(pv >= 0.0) || std::abs(pv - std::round(pv)) > 1e-9 || pv > 1e9)
+      fail(w.column('P'), "expected a program number P with M98, found P" + num(pv));
+    long program = std::lround(pv);
+    long times = 1;
+    if (w.has('L')) {
+      const double l = w.get('L');
+      if (!(l >= 0.0) || std::abs(l - std::round(l)) > 1e-9 || l > 1e9)
+        fail(w.column('L'), "expected a repeat count L with M98, found L" + num(l));
+      times = std::lround(l);
+    } else if (options_.dialect == Dialect::Fanuc && program > 9999) {
+      times = program / 10000;
+      program %= 10000;
+    }
+    if (times == 0) return;
+    const std::string label = std::to_string(program);
+    int targetFile = -1, targetLine = -1;
+    auto findIn = [&](int fi) {
+      const SourceFile& f = *files_[static_cast<std::size_t>(fi)];
+      const auto it = f.labels.find(label);
+      if (it == f.labels.end()) return false;
+      for (const auto& [line, kw] : it->second)
+        if (kw == "program") {
+          targetFile = fi;
+          targetLine = line;
+          return true;
+        }
+      return false;
+    };
+    if (!findIn(file_) && !findIn(0))
+      for (int fi = 1; fi < static_cast<int>(files_.size()) && targetFile < 0; ++fi)
+        findIn(fi);
+    if (targetFile < 0) {
+      std::vector<std::string> folders{files_[0]->folder};
+      folders.insert(folders.end(), options_.subroutinePath.begin(), options_.subroutinePath.end());
+      for (const std::string& folder : folders) {
+        const std::filesystem::path p = std::filesystem::path(folder) / (label + ".ngc");
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(p, ec)) continue;
+        files_.push_back(makeSource(p.string(), readFile(p.string())));
+        out_.files.push_back(p.string());
+        const int fi = static_cast<int>(files_.size()) - 1;
+        if (!findIn(fi)) {
+          targetFile = fi;  // a file without its O line: it starts at its first line
+          targetLine = -1;
+        }
+        break;
+      }
+    }
+    if (targetFile < 0)
+      fail(w.column('P'), "expected a subprogram O" + label + " (in this program or as " + label +
+                              ".ngc beside it), found none");
+    if (frames_.size() >= 64)
+      fail(column, "expected subprogram calls nested at most 64 deep, found deeper recursion");
+    Frame f;
+    f.file = file_;
+    f.returnLine = line_ + 1;
+    f.m98 = true;
+    f.startFile = targetFile;
+    f.startLine = targetLine;
+    f.repeats = times - 1;
+    frames_.push_back(std::move(f));
+    file_ = targetFile;
+    line_ = targetLine;  // (the run loop goes on with the next line)
+  }
+
+  /// M99: back after the M98 that called, or once more from the subprogram's start.
+  void subprogramReturn(int column) {
+    Frame& f = frames_.back();
+    if (!f.m98)
+      fail(column,
+           "expected M99 only in a subprogram an M98 called, found it in an O-word "
+           "subroutine (end that with O-endsub)");
+    if (f.repeats > 0) {
+      --f.repeats;
+      file_ = f.startFile;
+      line_ = f.startLine;
+      return;
+    }
+    file_ = f.file;
+    line_ = f.returnLine - 1;
+    frames_.pop_back();
   }
 
   void saveModal() {
@@ -1561,10 +1708,12 @@ class Interpreter final : public gcode::ParameterSource {
     }
     m.turns = ccw ? turns : -turns;
     const char offPlane = plane_ == Plane::XY ? 'K' : plane_ == Plane::XZ ? 'J' : 'I';
-    if (w.has(offPlane))
+    // grbl ignores the off-plane word (FreeCAD's grbl post writes K0 on G17 arcs).
+    if (w.has(offPlane) && options_.dialect != Dialect::Grbl)
       fail(w.column(offPlane), std::string("expected ") + ax.ia + "/" + ax.ib +
                                    " centre words for an arc in the " + planeName(plane_) +
-                                   " plane, found " + offPlane);
+                                   " plane, found " + offPlane +
+                                   " (--dialect grbl ignores it, as grbl does)");
     const double sa = pos_[ax.a], sb = pos_[ax.b], ea = end[ax.a], eb = end[ax.b];
     double ca = 0.0, cb = 0.0;
     if (w.has('R')) {
@@ -1974,6 +2123,7 @@ class Interpreter final : public gcode::ParameterSource {
   // pos_: after G40, the offset point the tool is at (pos_ is the programmed point, as
   // LinuxCNC has it).
   bool arcNotAllowed_ = false;  ///< the move after G40 must be straight
+  bool startKnown_ = false;     ///< the start position is where the tool is (see ReaderOptions)
   std::optional<Modal> saved_;
   std::optional<LatheProfile> profile_;
 

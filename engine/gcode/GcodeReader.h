@@ -9,8 +9,9 @@
 /// G49, G53, G54-G59.3, G61 G61.1 G64, G73 G80 G81 G82 G83 G85 G89 with G98 G99 (XY plane),
 /// G90 G91 G90.1 G91.1, G92 G92.1 G92.2 G92.3, G93 G94 G95, G96 G97, F S T M0 M1 M2 M3 M4 M5
 /// M6 M7 M8 M9 M30 M48-M53 M60 M61 M62-M68 M70-M73, N, comments, %, block delete, parameters,
-/// expressions, and O-word subroutines (in the program or in <name>.ngc beside it), loops
-/// and conditionals.
+/// expressions, O-word subroutines (in the program or in <name>.ngc beside it), loops and
+/// conditionals, and M98/M99 subprograms (O<n> in the program or <n>.ngc beside it) as
+/// LinuxCNC 2.9 and Fanuc/Haas controls run them.
 ///
 /// Rotary and UVW words are read but stay out of the XYZ path (the move is marked otherAxes).
 ///
@@ -28,13 +29,38 @@
 #include "engine/gcode/Toolpath.h"
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace engage {
 
+/// Which controller's reading of the few words they differ on: LinuxCNC (the default),
+/// Fanuc/Haas (M98 P with the repeat count in its leading digits), grbl (the off-plane
+/// centre word of an arc, which FreeCAD's grbl post writes, ignored).
+enum class Dialect { LinuxCNC, Fanuc, Grbl };
+
+/// The machine a program runs on (engine/run/Machine.h reads it from a file), in its own
+/// coordinates (mm): where G54's origin is, where G28 and G30 go, where the tool tip is when
+/// the program starts, and how far the axes travel. Without one, the machine's coordinates are
+/// the program's (G54 at the machine's zero) and the tool starts at the program's origin.
+struct MachineSetup {
+  std::string name;                           ///< the file it came from, for messages
+  Eigen::Vector3d workOffset{0.0, 0.0, 0.0};  ///< G54's origin
+  Eigen::Vector3d g28{0.0, 0.0, 0.0};
+  Eigen::Vector3d g30{0.0, 0.0, 0.0};
+  Eigen::Vector3d start{0.0, 0.0, 0.0};  ///< the tool tip when the program starts
+  bool limited = false;                  ///< travel limits given
+  Eigen::Vector3d travelMin{0.0, 0.0, 0.0}, travelMax{0.0, 0.0, 0.0};
+};
+
 /// How to read a program.
 struct ReaderOptions {
+  Dialect dialect = Dialect::LinuxCNC;
+  /// With a machine, the moves come out relative to G54's origin (so that a stock given in
+  /// the program's coordinates stays where it is) and G53 moves, G28 and G30 go where the
+  /// machine puts them; a move beyond its travel is an error.
+  std::optional<MachineSetup> machine;
   /// LinuxCNC tool table (T P Z D ... lines); empty: every tool has zero length.
   std::string toolTable;
   /// The tool table's lengths are in inches (LinuxCNC's stand-alone rs274 default) rather
@@ -51,10 +77,10 @@ struct ReaderOptions {
   /// beyond it.
   /// 10 million moves hold about 1.8 GB; the option --max-moves raises it.
   std::size_t maxMoves = 10'000'000;
-  /// Where the tool tip starts (machine coordinates, mm) and the tool in the spindle. By
-  /// default an assumption, the program origin with no tool; `startKnown` says it is where an
-  /// earlier program left the machine (the next file of a CAMotics project), so that a G43
-  /// before the first move shifts it as on the machine.
+  /// Where the tool tip starts (mm, the moves' frame) and the tool in the spindle. By
+  /// default an assumption, the program origin with no tool (or the machine's start);
+  /// `startKnown` says it is where an earlier program left the machine (the next file of a
+  /// CAMotics project), so that a G43 before the first move shifts it as on the machine.
   Eigen::Vector3d start{0.0, 0.0, 0.0};
   int startTool = 0;
   bool startKnown = false;

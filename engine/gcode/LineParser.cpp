@@ -448,6 +448,24 @@ Block parseLine(std::string_view line, const ParameterSource& params) {
   return block;
 }
 
+bool peekProgramNumber(std::string_view line, std::string& number) {
+  try {
+    const Compact compact(line, nullptr);
+    const std::string& s = compact.text();
+    std::size_t p = 0;
+    if (!s.empty() && s[0] == '/') p = 1;
+    skipLineNumber(s, p);
+    if (p >= s.size() || s[p] != 'o' || p + 1 >= s.size()) return false;
+    for (std::size_t i = p + 1; i < s.size(); ++i)
+      if (!std::isdigit(static_cast<unsigned char>(s[i]))) return false;
+    const std::size_t first = s.find_first_not_of('0', p + 1);
+    number = first == std::string::npos ? "0" : s.substr(first);
+    return true;
+  } catch (const ParseFailure&) {
+    return false;
+  }
+}
+
 bool peekOWord(std::string_view line, std::string& label, std::string& keyword) {
   try {
     const Compact compact(line, nullptr);

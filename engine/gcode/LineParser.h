@@ -76,4 +76,8 @@ Block parseLine(std::string_view line, const ParameterSource& params);
 /// false when the line has none. Never throws.
 bool peekOWord(std::string_view line, std::string& label, std::string& keyword);
 
+/// A program number alone on its line ("O2000", "O0100 (POCKET)"), the label M98 P calls,
+/// as a number without leading zeros; false for any other line. Never throws.
+bool peekProgramNumber(std::string_view line, std::string& number);
+
 }  // namespace engage::gcode

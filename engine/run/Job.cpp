@@ -2,6 +2,8 @@
 
 #include "engine/tools/CamoticsProject.h"
 
+#include "engine/run/Machine.h"
+
 #include "cutters/Error.h"
 #include "engine/gcode/GcodeReader.h"
 
@@ -330,6 +332,8 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   ReaderOptions ro;
   ro.toolTable = text("tool-table");
   ro.toolTableInch = text("tool-table-units") == "in";
+  ro.dialect = dialectOf(text("dialect"));
+  if (!text("machine").empty()) ro.machine = readMachine(text("machine"));
   job.toolTableInch = ro.toolTableInch;
   std::optional<ToolLibrary> library;
   job.toolsFile = text("tools");

@@ -95,6 +95,12 @@ std::vector<OptionInfo> makeTable() {
       plain("tool-table", K::Text, G::Simulation, "", "LinuxCNC tool table for G43"),
       choice("tool-table-units", G::Simulation, {"mm", "in"}, "mm",
              "units of the tool table's lengths: mm or in"),
+      choice("dialect", G::Simulation, {"linuxcnc", "fanuc", "grbl"}, "linuxcnc",
+             "the controller the program is for: linuxcnc, fanuc (M98 P with the count in its "
+             "leading digits) or grbl (ignores an arc's off-plane centre word)"),
+      plain("machine", K::Text, G::Simulation, "",
+            "machine description (JSON: work offset, G28/G30, start position, travel) so that "
+            "G53, G28 and G30 go where the machine puts them"),
       plain("max-moves", K::Count, G::Simulation, "10000000",
             "most moves a program may make (a loop that never ends is refused at this)"),
       plain("max-steps", K::Count, G::Simulation, "5000000",

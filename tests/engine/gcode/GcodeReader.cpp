@@ -104,14 +104,15 @@ TEST_CASE("programs in the dialects users bring interpret as LinuxCNC's rs274 do
   ReaderOptions options;
   options.toolTable = data + "linuxcnc/tools.tbl";
   options.toolTableInch = true;  // rs274 without an INI file reads tool tables in inches
+  // fanuc_subprogram: a Haas-style program with an M98 P L subprogram after its M30.
   // compensation/: cutter radius compensation (G41/G42, G41.1/G42.1, G40) on both sides,
   // outside and inside corners of lines and arcs, an arc entry, G91, the XZ plane.
   for (const char* path :
        {"dialects/fusion360_pocket.nc", "dialects/freecad_profile.ngc",
         "dialects/grbl_engrave.gcode", "dialects/inch_helix.ngc", "dialects/linuxcnc_features.ngc",
         "dialects/linuxcnc_probe_tap.ngc", "dialects/lathe_diameter_thread.ngc",
-        "dialects/lathe_turning_cycles.ngc", "compensation/profile_mm.ngc",
-        "compensation/entry_xz_mm.ngc"}) {
+        "dialects/lathe_turning_cycles.ngc", "dialects/fanuc_subprogram.nc",
+        "compensation/profile_mm.ngc", "compensation/entry_xz_mm.ngc"}) {
     INFO(path);
     const std::string name = std::string(path).substr(std::string(path).find('/') + 1);
     const std::string stem = name.substr(0, name.find('.'));
@@ -483,6 +484,74 @@ TEST_CASE("cutter radius compensation: the tool a radius to the side, corners as
              Contains("expected a D word (the tool's diameter) with G41.1"));
   CHECK_THAT(errorOf("G21 F100\nG41.1 D10 G1 X20\nG81 X30 Y0 Z-1 R1\n"),
              Contains("expected G0, G1, G2 or G3 with cutter radius compensation on, found G81"));
+}
+
+TEST_CASE("M98/M99 subprograms, Fanuc's repeat digits and grbl's off-plane word", "[gcode]") {
+  // rs274 2.9 on the same text: X10 after one call; X10, X20, X30 after L3; M99 in the main
+  // program ends it.
+  const std::string sub = "O2000\nG91 G1 X10 F100\nG90\nM99\n";
+  {
+    const auto m = moves("G21 G90\nG0 X0 Y0 Z5\nM98 P2000 L3\nG0 X50\nM99\n" + sub);
+    REQUIRE(m.size() == 5);
+    checkPoint(m[1].end, 10, 0, 5);
+    checkPoint(m[3].end, 30, 0, 5);
+    CHECK(m[3].line == 7);  // the subprogram's line
+    checkPoint(m[4].end, 50, 0, 5);
+  }
+  {
+    // P32000: O2000 three times with --dialect fanuc (the digits above four are the count);
+    // program 32000 for LinuxCNC.
+    ReaderOptions fanuc;
+    fanuc.dialect = Dialect::Fanuc;
+    const auto m = run("G21 G90\nG0 X0 Y0 Z5\nM98 P32000\nM30\n" + sub, fanuc).moves;
+    REQUIRE(m.size() == 4);
+    checkPoint(m[3].end, 30, 0, 5);
+    CHECK_THAT(errorOf("G21\nM98 P32000\nM30\n" + sub),
+               Contains("test.ngc:2:5: expected a subprogram O32000"));
+  }
+  CHECK_THAT(errorOf("G21\nM98\n"), Contains("test.ngc:2:1: expected a P word"));
+  CHECK_THAT(errorOf("G21\nM98 P7\nM30\nO7\nG0 X1\n"),
+             Contains("expected M99 closing the subprogram, found the end of the file"));
+  // grbl ignores the off-plane centre word (FreeCAD's grbl post writes K0 in G17).
+  const std::string arc = "G21 G17 G90\nG0 X0 Y0\nG2 X10 Y0 I5 J0 K0 F100\n";
+  CHECK_THAT(errorOf(arc),
+             Contains("test.ngc:3:17: expected I/J centre words") && Contains("--dialect grbl"));
+  ReaderOptions grbl;
+  grbl.dialect = Dialect::Grbl;
+  const auto g = run(arc, grbl).moves;
+  REQUIRE(g.size() == 2);
+  checkPoint(g[1].center, 5, 0, 0);
+}
+
+TEST_CASE("a machine: G53, G28 and G30 where it puts them, its start, its travel", "[gcode]") {
+  // G54's origin at machine (-250, -200, -180); the moves come out in G54's frame, where the
+  // machine's zero is (250, 200, 180).
+  ReaderOptions o;
+  MachineSetup m;
+  m.name = "vmc.json";
+  m.workOffset = {-250, -200, -180};
+  m.g30 = {-10, -10, 0};
+  m.start = {0, 0, 0};
+  o.machine = m;
+  const auto moves = run("G21 G90\nG0 X10 Y10\nG1 Z-2 F100\nG53 G0 Z0\nG30\nG28\nM30\n", o).moves;
+  REQUIRE(moves.size() == 5);
+  checkPoint(moves[0].start, 250, 200, 180);  // the tool starts at the machine's home
+  checkPoint(moves[0].end, 10, 10, 180);
+  checkPoint(moves[2].end, 10, 10, 180);  // G53 Z0: the top of the machine, not the stock's
+  checkPoint(moves[3].end, 240, 190, 180);
+  checkPoint(moves[4].end, 250, 200, 180);
+  m.limited = true;
+  m.travelMin = {-510, -410, -300};
+  m.travelMax = {0, 0, 0};
+  o.machine = m;
+  try {
+    run("G21 G90\nG0 X10 Y10\nG0 X300\n", o);
+    FAIL("a move beyond the travel was accepted");
+  } catch (const GcodeError& e) {
+    CHECK_THAT(e.what(), Contains("test.ngc:3:1: expected moves within the travel of the machine "
+                                  "(vmc.json: X -510 mm to 0 mm, machine coordinates), found one "
+                                  "to X 50 mm"));
+  }
 }
 
 TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]") {

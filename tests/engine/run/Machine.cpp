@@ -1,0 +1,59 @@
+// Tests of engine/run/Machine.h: the machine description file, its units and its refusals.
+
+#include "engine/run/Machine.h"
+
+#include "cutters/Error.h"
+
+#include "tests/engine/run/RunTestSupport.h"
+
+#include <catch2/catch.hpp>
+
+#include <string>
+
+using namespace engage;
+using Catch::Matchers::Contains;
+
+namespace {
+
+std::string errorOf(const std::string& text) {
+  const test::TempFolder dir("machine_bad");
+  try {
+    readMachine(dir.write("machine.json", text));
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("a machine description: positions in mm or inches, the start at G28 or G30",
+          "[machine]") {
+  const MachineSetup m = readMachine(ENGAGE_SOURCE_DIR "/data/machines/vmc_mm.json");
+  CHECK(m.workOffset == Eigen::Vector3d(-250, -200, -180));
+  CHECK(m.g30 == Eigen::Vector3d(-10, -10, 0));
+  CHECK(m.start == m.g28);  // "start": "g28"
+  CHECK(m.limited);
+  CHECK(m.travelMin == Eigen::Vector3d(-510, -410, -300));
+  // Inches: every number times 25.4 (exact in binary for these values' products to 1e-12).
+  const test::TempFolder dir("machine_inch");
+  const MachineSetup i = readMachine(
+      dir.write("machine.json", R"({"units": "in", "work_offset": [-10, -8, -7], "g30": [-1, -1, 0],
+                          "start": "g30"})"));
+  CHECK(i.workOffset.x() == Approx(-254.0).margin(1e-12));
+  CHECK(i.start.x() == Approx(-25.4).margin(1e-12));
+  CHECK_FALSE(i.limited);
+}
+
+TEST_CASE("a machine description that cannot be right is refused, naming the key", "[machine]") {
+  CHECK_THAT(errorOf(R"({"home": [0, 0, 0]})"), Contains("unknown key \"home\""));
+  CHECK_THAT(errorOf(R"({"units": "cm"})"), Contains("\"units\" must be \"mm\" or \"in\""));
+  CHECK_THAT(errorOf(R"({"g28": [0, 0]})"), Contains("\"g28\" must be [x, y, z]"));
+  CHECK_THAT(errorOf(R"({"travel": {"min": [0, 0, 0], "max": [-1, 10, 10]}})"),
+             Contains("min must not exceed max along X"));
+  CHECK_THAT(errorOf(R"({"start": [5, 0, 0], "travel": {"min": [-9, -9, -9], "max": [0, 0, 0]}})"),
+             Contains("\"start\" lies outside the travel along X"));
+  CHECK_THAT(errorOf(R"({"g28": [0, 0, 0], "g28": [1, 1, 1]})"),
+             Contains("the key \"g28\" is given twice"));
+  CHECK_THAT(errorOf("not json"), Contains("not valid JSON"));
+}
