@@ -20,10 +20,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -31,6 +34,7 @@
 #include <memory>
 #include <mutex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -223,24 +227,97 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
   return r;
 }
 
-/// An exclusive, non-blocking lock on a job (flock on a lock file beside its folder): taken
-/// while the job runs, so that two processes never run one job. flock works on local file
-/// systems and on NFS with a lock manager; the kernel releases it when the process dies.
+/// This process as a lock's owner: "host pid".
+std::string lockOwner() {
+  char host[256] = {};
+  if (::gethostname(host, sizeof host - 1) != 0) std::snprintf(host, sizeof host, "unknown");
+  return std::string(host) + " " + std::to_string(::getpid());
+}
+
+/// An exclusive, non-blocking lock on a job, taken while the job runs, so that two processes
+/// never run one job. flock on a lock file beside the job's folder, which then names its
+/// owner ("host pid", so that the one that skips the job can say who runs it); flock works on
+/// local file systems and on NFS with a lock manager, and the kernel releases it when the
+/// process dies. Where the file system refuses flock (ENOLCK, EOPNOTSUPP: NFS without a lock
+/// manager) or ENGAGE_LOCK_FILES=1 asks for it: an owner file created exclusively
+/// (LOCKFILE.owner, O_EXCL), removed when the job ends; one left by a process of this host that
+/// is gone (killed) is stale and taken over. (A dead owner on another host cannot be told from
+/// a live one: its file stays until removed by hand, and the log names it.)
 class JobLock {
  public:
-  explicit JobLock(const fs::path& file) : fd_(::open(file.c_str(), O_CREAT | O_RDWR, 0644)) {
-    held_ = fd_ >= 0 && ::flock(fd_, LOCK_EX | LOCK_NB) == 0;
+  explicit JobLock(const fs::path& file) : file_(file) {
+    const char* forced = std::getenv("ENGAGE_LOCK_FILES");
+    const bool ownerFiles = forced && std::string(forced) == "1";
+    if (!ownerFiles) {
+      fd_ = ::open(file.c_str(), O_CREAT | O_RDWR, 0644);
+      if (fd_ < 0) return;
+      if (::flock(fd_, LOCK_EX | LOCK_NB) == 0) {
+        held_ = true;
+        const std::string me = lockOwner() + "\n";
+        if (::ftruncate(fd_, 0) == 0 && ::pwrite(fd_, me.data(), me.size(), 0) < 0) {
+        }  // (the owner's name is for messages only)
+        return;
+      }
+      if (errno != ENOLCK && errno != EOPNOTSUPP && errno != ENOSYS) {
+        owner_ = readOwner(file);
+        return;
+      }
+      ::close(fd_);
+      fd_ = -1;
+    }
+    takeOwnerFile();
   }
   ~JobLock() {
     if (fd_ >= 0) ::close(fd_);
+    if (ownerFile_) ::unlink((file_.string() + ".owner").c_str());
   }
   JobLock(const JobLock&) = delete;
   JobLock& operator=(const JobLock&) = delete;
   bool acquired() const { return held_; }
+  /// Who holds the lock when this one did not get it ("host pid"; "" when unknown).
+  const std::string& owner() const { return owner_; }
+  /// What this one did about a stale owner file ("" when nothing).
+  const std::string& note() const { return note_; }
 
  private:
-  int fd_;
+  static std::string readOwner(const fs::path& file) {
+    std::ifstream in(file);
+    std::string host, pid;
+    in >> host >> pid;
+    return host.empty() ? std::string() : host + " " + pid;
+  }
+  void takeOwnerFile() {
+    const std::string path = file_.string() + ".owner";
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      const int fd = ::open(path.c_str(), O_CREAT | O_EXCL | O_WRONLY, 0644);
+      if (fd >= 0) {
+        const std::string me = lockOwner() + "\n";
+        const bool written = ::write(fd, me.data(), me.size()) == static_cast<ssize_t>(me.size());
+        ::close(fd);
+        held_ = ownerFile_ = written;
+        return;
+      }
+      owner_ = readOwner(path);
+      // Stale: its owner ran on this host and is gone.
+      std::istringstream parts(owner_);
+      std::string host;
+      long pid = 0;
+      parts >> host >> pid;
+      std::istringstream mine(lockOwner());
+      std::string myHost;
+      mine >> myHost;
+      if (host != myHost || pid <= 0 || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH)
+        return;
+      note_ = "a stale lock of process " + owner_ + " (gone) taken over";
+      ::unlink(path.c_str());
+    }
+  }
+
+  fs::path file_;
+  int fd_ = -1;
   bool held_ = false;
+  bool ownerFile_ = false;
+  std::string owner_, note_;
 };
 
 /// The record of a finished job, or null when it has not run with these options.
@@ -554,6 +631,10 @@ BatchReport runBatch(const BatchOptions& o) {
         // One process per job: another batch on the same folder (a resubmitted shard, a
         // second batch started by hand) runs it, or has run it since this one looked.
         const JobLock held(jobs / ("." + todo[k]->name + ".lock"));
+        if (!held.note().empty()) {
+          std::lock_guard<std::mutex> lock(mutex);
+          std::fprintf(stderr, "batch: job %s: %s\n", todo[k]->name.c_str(), held.note().c_str());
+        }
         const bool done = [&] {
           if (!held.acquired()) return true;
           const ordered_json now = recordOf(*todo[k], jobs);
@@ -564,8 +645,9 @@ BatchReport runBatch(const BatchOptions& o) {
           pending.erase(todo[k]->name);
           finishedOne.notify_all();
           ++elsewhere;
-          std::fprintf(stderr, "batch: job %s runs or ran in another process: skipped here\n",
-                       todo[k]->name.c_str());
+          std::fprintf(stderr, "batch: job %s runs or ran in another process%s: skipped here\n",
+                       todo[k]->name.c_str(),
+                       held.owner().empty() ? "" : (" (" + held.owner() + ")").c_str());
           continue;
         }
         try {

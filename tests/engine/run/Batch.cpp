@@ -5,16 +5,23 @@
 #include "cutters/Error.h"
 #include "tests/engine/run/RunTestSupport.h"
 
+#include <fcntl.h>
 #include <sched.h>
+#include <sys/file.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 using namespace engage;
 using Catch::Matchers::Contains;
+namespace fs = std::filesystem;
 
 TEST_CASE("a batch runs its jobs and records a failure without stopping", "[run]") {
   test::TempFolder dir("batch_small");
@@ -114,4 +121,42 @@ TEST_CASE("one job alone, fewer files, and a merge that lists what is missing", 
   CHECK_THAT(mergeBatch(o), Contains("merged 1 jobs") && Contains("missing from the table: a"));
   std::ifstream in(dir.path() / "out" / "batch.json");
   CHECK(nlohmann::json::parse(in)["missing"] == nlohmann::json::array({"a"}));
+}
+
+TEST_CASE("a job another process holds is left to it; a stale lock of a dead process is not",
+          "[run]") {
+  test::TempFolder dir("batch_locks");
+  dir.write("slot.ngc", test::slotProgram());
+  BatchOptions o;
+  o.manifest =
+      dir.write("m.json", R"({"jobs": [{"program": "slot.ngc", "tool": "flat", "diameter": "6mm",
+                              "stock": "box:-10,-10,-10,40,10,0", "voxel": "1mm"}]})");
+  o.out = (dir.path() / "out").string();
+  o.quiet = true;
+  const fs::path jobs = dir.path() / "out" / "jobs";
+  fs::create_directories(jobs);
+  char host[256] = {};
+  REQUIRE(::gethostname(host, sizeof host - 1) == 0);
+  {
+    // flock: a lock this test holds through its own open file is another holder.
+    const int fd = ::open((jobs / ".slot.lock").c_str(), O_CREAT | O_RDWR, 0644);
+    REQUIRE(fd >= 0);
+    REQUIRE(::flock(fd, LOCK_EX | LOCK_NB) == 0);
+    CHECK_THAT(runBatch(o).text, Contains("1 jobs: 0 run (0 failed), 1 already done"));
+    ::close(fd);
+  }
+  // Owner files (a file system without flock): a live owner on this host keeps the job; one
+  // whose process is gone is stale and taken over.
+  ::setenv("ENGAGE_LOCK_FILES", "1", 1);
+  const fs::path owner = jobs / ".slot.lock.owner";
+  std::ofstream(owner) << host << " " << ::getppid() << "\n";
+  CHECK_THAT(runBatch(o).text, Contains("1 jobs: 0 run (0 failed), 1 already done"));
+  CHECK(fs::exists(owner));
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  REQUIRE(::waitpid(child, nullptr, 0) == child);
+  std::ofstream(owner) << host << " " << child << "\n";
+  CHECK_THAT(runBatch(o).text, Contains("1 jobs: 1 run (0 failed), 0 already done"));
+  CHECK_FALSE(fs::exists(owner));  // released when the job ended
+  ::unsetenv("ENGAGE_LOCK_FILES");
 }
