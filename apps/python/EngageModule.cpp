@@ -264,7 +264,8 @@ void bindRun(py::module_& m) {
           "summary.json as a dict (report units, see unit_labels)")
       .def_property_readonly("removed_mm3", [](const RunResult& r) { return r.sim.removed; })
       .def_property_readonly("refed_program", [](const RunResult& r) { return r.refed; })
-      .def("steps_csv", &stepsTable, "steps.csv's text")
+      .def(
+          "steps_csv", [](const RunResult& r) { return stepsTable(r); }, "steps.csv's text")
       .def(
           "write",
           [](const RunResult& r, const std::string& folder) {

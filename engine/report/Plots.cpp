@@ -51,7 +51,8 @@ int runShell(const std::string& command) {
 
 /// Run gnuplot on `script` in `dir`, then give the plots their names.
 void runGnuplot(const std::filesystem::path& dir, const std::string& scriptName,
-                const std::string& script, std::vector<std::string>& files) {
+                const std::string& script, std::vector<std::string>& files,
+                const std::string& definitions = "") {
   const std::filesystem::path scriptFile = dir / scriptName;
   {
     std::ofstream f(scriptFile);
@@ -60,7 +61,9 @@ void runGnuplot(const std::filesystem::path& dir, const std::string& scriptName,
   }
   const std::string log = scriptName + ".log";
   const std::string command =
-      "cd " + quoted(dir.string()) + " && gnuplot " + quoted(scriptName) + " 2> " + quoted(log);
+      "cd " + quoted(dir.string()) + " && gnuplot " +
+      (definitions.empty() ? std::string() : "-e " + quoted(definitions) + " ") +
+      quoted(scriptName) + " 2> " + quoted(log);
   const int rc = runShell(command);
   if (rc != 0) {
     // Say what gnuplot said (its last line), and leave no half-drawn plot behind.
@@ -122,7 +125,10 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
   const std::filesystem::path dir(p.folder);
   const std::string L = p.length, F = p.feed, Q = p.rate;
   std::vector<std::string> files;
+  // By hand, `gnuplot plots.gp` draws from all of steps.csv; engage may give it a shorter
+  // table (PlotSpec::data).
   std::string script =
+      "if (!exists(\"data\")) data = 'steps.csv'\n"
       "set datafile separator ','\nset datafile columnheaders\nset grid\nset key outside top "
       "center horizontal\n";
   auto plot = [&](const std::string& name, const std::string& body) {
@@ -140,8 +146,8 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
   }
   std::string mrr =
       "set title 'Material removal rate along the path'\nset xlabel 'arc length (" + p.lengthLabel +
-      ")'\nset ylabel 'MRR (" + p.rateLabel + ")'\n" + "plot 'steps.csv' using " + x + ":\"mrr_" +
-      Q + "\" with lines lw 1.5 title 'measured (" + p.model + ")', " + "'' using " + x +
+      ")'\nset ylabel 'MRR (" + p.rateLabel + ")'\n" + "plot data using " + x + ":\"mrr_" + Q +
+      "\" with lines lw 1.5 title 'measured (" + p.model + ")', " + "'' using " + x +
       ":\"mrr_exact_" + Q + "\" with lines lw 1 dt 2 title 'analytic, exact', " + "'' using " + x +
       ":\"mrr_paper_" + Q + "\" with lines lw 1 dt 3 title 'analytic, paper'";
   if (p.schedule)
@@ -150,14 +156,14 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
   plot("mrr", mrr + "\n");
   if (p.schedule) {
     plot("feed", "set title 'Feed'\nset xlabel 'arc length (" + p.lengthLabel +
-                     ")'\nset ylabel 'feed (" + p.feedLabel + ")'\nplot 'steps.csv' using " + x +
+                     ")'\nset ylabel 'feed (" + p.feedLabel + ")'\nplot data using " + x +
                      ":\"feed_" + F + "\" with lines lw 1.5 title 'programmed', '' using " + x +
                      ":\"feed_scheduled_" + F + "\" with lines lw 1.5 title 'scheduled'\n");
     std::string acc =
         "set title 'Tangential acceleration between successive feeds (Eq 24)'\nset xlabel 'arc "
         "length (" +
         p.lengthLabel + ")'\nset ylabel 'acceleration (" + p.accelerationLabel +
-        ")'\nplot 'steps.csv' using " + x + ":\"acceleration_" + p.accelerationTag +
+        ")'\nplot data using " + x + ":\"acceleration_" + p.accelerationTag +
         "\" with lines lw 1.5 title 'scheduled'";
     if (p.accelerationLimit > 0) {
       char buf[64];
@@ -173,7 +179,7 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
                            const std::string& column, const std::string& unit, double limit) {
       std::string body = "set title '" + title + " along the path'\nset xlabel 'arc length (" +
                          p.lengthLabel + ")'\nset ylabel '" + title + " (" + unit +
-                         ")'\nplot 'steps.csv' using " + x + ":\"" + column +
+                         ")'\nplot data using " + x + ":\"" + column +
                          "\" with lines lw 1.5 title 'programmed feeds'";
       if (p.schedule) {
         const std::string scheduled =
@@ -196,10 +202,11 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
   plot("topview", "set title 'Top view, coloured by measured MRR (" + p.rateLabel +
                       ")'\nset size ratio -1\nset xlabel 'x (" + p.lengthLabel +
                       ")'\nset ylabel 'y (" + p.lengthLabel + ")'\nset palette rgb 33,13,10\n" +
-                      "plot 'steps.csv' using (strcol(\"kind\") eq \"rapid\" ? NaN : column(\"x_" +
-                      L + "\")):\"y_" + L + "\":\"mrr_" + Q +
+                      "plot data using (strcol(\"kind\") eq \"rapid\" ? NaN : column(\"x_" + L +
+                      "\")):\"y_" + L + "\":\"mrr_" + Q +
                       "\" with points pt 7 ps 0.4 lc palette notitle\nset size noratio\n");
-  runGnuplot(dir, "plots.gp", script, files);
+  runGnuplot(dir, "plots.gp", script, files,
+             p.data == "steps.csv" ? std::string() : "data='" + p.data + "'");
   return files;
 }
 

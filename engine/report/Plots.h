@@ -15,6 +15,10 @@ namespace engage {
 /// What to plot, in the run's units.
 struct PlotSpec {
   std::string folder;  ///< where steps.csv is and the plots go
+  /// The table the plots read, in `folder`: steps.csv, or for a long run the steps the
+  /// report plots (every bucket's extremes: RunReport.h's reportSteps), so that gnuplot does
+  /// not draw half a million points into a 1400-pixel-wide picture.
+  std::string data = "steps.csv";
   std::string length;  ///< column tag of lengths, e.g. "mm"
   std::string feed;    ///< e.g. "mm_min"
   std::string rate;    ///< e.g. "mm3_min"

@@ -67,7 +67,15 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
     w.stockFiles = result.stock != nullptr;
     // gnuplot draws in its own process while the stock files are written (seconds each on a
     // fine grid); its outcome is collected below.
-    const PlotSpec ps = plotSpec(result, dir);
+    PlotSpec ps = plotSpec(result, dir);
+    // A long run's plots read the steps the report plots (every bucket's extremes): drawing
+    // all of CAMotics' tiger (111,279 steps at 1.03 mm) took 4.0 s, and the dexel run 6.0 s
+    // against 2.0 s now (one core, medians of three alternating runs).
+    const std::vector<std::size_t> rows = reportSteps(result);
+    if (rows.size() < result.sim.steps.size()) {
+      ps.data = ".plot_steps.csv";
+      writeAtomically(dir / ps.data, stepsTable(result, &rows));
+    }
     auto plots = std::async(std::launch::async, [&ps] { return writePlots(ps); });
     w.openEdges = writeStockFiles(result, dir);
     try {
@@ -76,6 +84,7 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
     } catch (const Error& e) {
       std::fprintf(stderr, "engage: warning: plots not drawn: %s\n", e.what());
     }
+    if (ps.data != "steps.csv") std::filesystem::remove(dir / ps.data);
   } else if (result.job.keepStock) {
     writeStockVdb(result, dir);
   }

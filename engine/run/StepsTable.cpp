@@ -27,7 +27,7 @@ double scheduledAcceleration(const RunResult& result, std::size_t i) {
   return tangentialAcceleration(result.plan.feed[i - 1], result.plan.feed[i], steps[i].length);
 }
 
-std::string stepsTable(const RunResult& result) {
+std::string stepsTable(const RunResult& result, const std::vector<std::size_t>* rows) {
   const UnitSystem sys = result.job.units;
   const bool schedule = result.job.scheduling();
   const bool cross = result.crossChecked;
@@ -59,7 +59,9 @@ std::string stepsTable(const RunResult& result) {
       "\n";
   const auto& steps = result.sim.steps;
   const Schedule& plan = result.plan;
-  for (std::size_t i = 0; i < steps.size(); ++i) {
+  const std::size_t count = rows ? rows->size() : steps.size();
+  for (std::size_t r = 0; r < count; ++r) {
+    const std::size_t i = rows ? (*rows)[r] : r;
     const StepRecord& s = steps[i];
     csv += std::to_string(i) + "," + std::to_string(s.move) + "," + std::to_string(s.line) + "," +
            std::to_string(s.tool) + "," + moveKindName(s.kind) + "," +

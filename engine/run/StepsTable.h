@@ -7,12 +7,14 @@
 
 #include "engine/run/Pipeline.h"
 
+#include <cstddef>
 #include <string>
+#include <vector>
 
 namespace engage {
 
-/// The table's text (header and rows).
-std::string stepsTable(const RunResult& result);
+/// The table's text (header and rows); with `rows`, only those steps (ascending indices).
+std::string stepsTable(const RunResult& result, const std::vector<std::size_t>* rows = nullptr);
 
 /// Step i's scheduled feed over its programmed one (0 for rapids): the MRR and the chip
 /// scale with it.

@@ -131,8 +131,10 @@ def main():
                     if label.startswith("engage"):
                         s = extra[label]
                         loop = statistics.median(r[1] for r in rs)
+                        # (summary.json speaks the program's units: in^3 for inch programs)
+                        removed = s["removed"] * (25.4 ** 3 if s.get("units") == "in" else 1.0)
                         row = (wall, loop, wall - loop, s["steps_per_second"],
-                               s.get("voxels_changed_per_second") or 0.0, mem, s["removed"])
+                               s.get("voxels_changed_per_second") or 0.0, mem, removed)
                         print("| %s | %.3g | %s | %s | %.2f | %.2f | %.2f | %.0f | %.3g | %.0f | %.1f |" % (
                             name, grid, "1" if one_core else "all", label, *row))
                     else:
