@@ -1717,8 +1717,9 @@ FloatGrid::Ptr boxFiltered(const FloatGrid& grid, double h, int factor) {
 
 }  // namespace
 
-std::size_t VoxelStock::writeStl(const std::string& path) const {
-  const TriangleMesh mesh = isoSurface(*impl_->grid, 0.0);
+std::size_t VoxelStock::writeStl(const std::string& path, std::size_t maxTriangles) const {
+  const TriangleMesh mesh =
+      maxTriangles > 0 ? viewMesh(maxTriangles) : isoSurface(*impl_->grid, 0.0);
   engage::writeStl(mesh, path);
   return boundaryEdgeCount(mesh);
 }

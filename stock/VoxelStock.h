@@ -104,7 +104,8 @@ class VoxelStock : public Stock {
   void writeRemovedVdb(const std::string& path) const;
   /// Write the stock's surface (the 0.5 iso-surface of the fraction) as binary STL with
   /// outward normals; returns the number of boundary (unpaired) edges, 0 for a closed mesh.
-  std::size_t writeStl(const std::string& path) const;
+  /// With `maxTriangles` > 0, viewMesh(maxTriangles)'s coarser surface instead.
+  std::size_t writeStl(const std::string& path, std::size_t maxTriangles = 0) const;
   /// The stock's surface as writeStl's, for viewing, with at most about `maxTriangles`
   /// triangles: when the stock's own grid would give more, the fractions are averaged over
   /// blocks of 2, 4 or 8 voxels a side (at most 8: beyond that the budget is exceeded); nearly

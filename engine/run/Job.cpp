@@ -505,6 +505,14 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   }
   job.quiet = text("quiet") == "true";
   job.report = text("no-report") != "true";
+  {
+    const int triangles = wholeNumber(text("stl-triangles"), "--stl-triangles");
+    if (triangles < 0) throw ParameterError("--stl-triangles must not be negative");
+    if (triangles > 0 && triangles < 1000)
+      throw ParameterError("--stl-triangles: expected 0 (the full grid) or at least 1000, found " +
+                           std::to_string(triangles));
+    job.stlTriangles = static_cast<std::size_t>(triangles);
+  }
   job.progressLabel = commandName(command);
   return job;
 }

@@ -122,6 +122,10 @@ std::vector<OptionInfo> makeTable() {
       choice("outputs", G::Output, {"all", "tables", "summary"}, "all",
              "files to write: all; tables (steps.csv, summary.json, the re-fed program, "
              "report.html without its 3D view); summary (summary.json, the re-fed program)"),
+      plain("stl-triangles", K::Count, G::Output, "0",
+            "stock.stl with at most about this many triangles (voxels averaged in blocks of "
+            "2, 4 or 8, nearly flat cells merged), for batches that must fit a quota; 0: the "
+            "full grid"),
       plain("no-report", K::Flag, G::Output, "",
             "do not write report.html (the run's summary, plots and 3D view in one page)"),
       commandLineOnly(plain("quiet", K::Flag, G::Output, "", "no progress on the terminal")),

@@ -9,14 +9,14 @@ std::size_t writeStockFiles(const RunResult& result, const std::filesystem::path
   if (const auto* voxels = dynamic_cast<const VoxelStock*>(result.stock.get())) {
     voxels->writeRemovedVdb((dir / "removed.vdb").string());
     voxels->writeStockVdb((dir / "stock.vdb").string());
-    return voxels->writeStl((dir / "stock.stl").string());
+    return voxels->writeStl((dir / "stock.stl").string(), result.job.stlTriangles);
   }
   if (const auto* dexels = dynamic_cast<const DexelStock*>(result.stock.get())) {
     // A dexel stock: its removal and its material as voxel fractions, for the same viewers.
     VoxelStock::writeRemovedVdb(*dexels, (dir / "removed.vdb").string());
     const VoxelStock shown = VoxelStock::fromDexels(*dexels);
     shown.writeStockVdb((dir / "stock.vdb").string());
-    return shown.writeStl((dir / "stock.stl").string());
+    return shown.writeStl((dir / "stock.stl").string(), result.job.stlTriangles);
   }
   return 0;
 }

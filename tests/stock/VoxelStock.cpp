@@ -418,3 +418,40 @@ TEST_CASE("a stock.vdb that is not an engage stock is refused with its reason", 
                     Contains("has no grid named 'stock'") && Contains("removed, step"));
   std::filesystem::remove(removed);
 }
+
+TEST_CASE("stock.stl within a triangle budget: fewer triangles, the same solid to a cell",
+          "[stock][vdb]") {
+  // A slot across a box, 0.2 mm voxels: the full grid's surface against a budget of 2,000.
+  Box3 b;
+  b.min = {0.0, 0.0, -10.0};
+  b.max = {40.0, 30.0, 0.0};
+  VoxelStock s = VoxelStock::box(b, 0.2);
+  s.remove(Sweep(AptCutter::ball(6.0, 18.0), line({-5, 15, -2}, {45, 15, -2}), 0.2));
+  const std::string full = tempVdb("full.stl"), light = tempVdb("light.stl");
+  CHECK(s.writeStl(full) == 0);  // closed
+  CHECK(s.writeStl(light, 2000) == 0);
+  const TriangleMesh a = readMesh(full), c = readMesh(light);
+  CHECK(c.triangles.size() <= 2000);
+  CHECK(c.triangles.size() * 10 < a.triangles.size());
+  // The coarser surface lies within about half of one of its cells (2, 4 or 8 voxels) of the
+  // stock's: its volume within the box's surface area (3,800 mm^2, the slot's less than 300
+  // more) times half a cell.
+  double cell = 0.0;
+  s.viewMesh(2000, &cell);
+  INFO("cell " << cell << " mm");
+  auto volume = [](const TriangleMesh& m) {
+    double v = 0.0;
+    for (const auto& t : m.triangles) {
+      const auto& p = m.points[t[0]];
+      const auto& q = m.points[t[1]];
+      const auto& r = m.points[t[2]];
+      v += (p[0] * (q[1] * r[2] - q[2] * r[1]) - p[1] * (q[0] * r[2] - q[2] * r[0]) +
+            p[2] * (q[0] * r[1] - q[1] * r[0])) /
+           6.0;
+    }
+    return v;
+  };
+  CHECK(std::abs(volume(c) - s.volume()) <= 4100.0 * cell / 2.0);
+  std::filesystem::remove(full);
+  std::filesystem::remove(light);
+}
