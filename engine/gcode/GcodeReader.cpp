@@ -286,6 +286,8 @@ class Interpreter final : public gcode::ParameterSource {
     params_.assign(kParameterCount + 1, 0.0);
     params_[5220] = 1.0;  // G54
     if (!options.toolTable.empty()) readToolTable(options.toolTable);
+    for (const auto& [tool, diameter] : options.toolDiameters)
+      toolDiameters_.emplace(tool, diameter);  // (the tool table's, if any, first)
     pos_ = options.start;
     tool_ = preparedTool_ = options.startTool;
     startKnown_ = options.startKnown;

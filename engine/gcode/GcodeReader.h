@@ -29,6 +29,7 @@
 #include "engine/gcode/Toolpath.h"
 
 #include <cstddef>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -66,6 +67,9 @@ struct ReaderOptions {
   /// The tool table's lengths are in inches (LinuxCNC's stand-alone rs274 default) rather
   /// than mm.
   bool toolTableInch = false;
+  /// Tool diameters (mm) by number for G41/G42 where the tool table gives none (a tool
+  /// library of another format: Fusion 360, FreeCAD, a CAMotics project).
+  std::map<int, double> toolDiameters;
   /// Skip lines that start with '/' (the block delete switch); off as in LinuxCNC's default.
   bool blockDelete = false;
   /// Folders searched for o<name> call subroutine files (<name>.ngc); the program's own

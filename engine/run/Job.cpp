@@ -355,6 +355,10 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
     // A LinuxCNC table is also the machine's tool lengths (G43), unless --tool-table says.
     if (library->format == "linuxcnc" && ro.toolTable.empty()) ro.toolTable = job.toolsFile;
   }
+  // Other libraries give G41/G42 their tools' diameters.
+  if (library && library->format != "linuxcnc")
+    for (const ToolEntry& t : library->tools)
+      if (t.cutter) ro.toolDiameters.emplace(t.number, 2.0 * t.cutter->radius());
   const int maxMoves = wholeNumber(text("max-moves"), "--max-moves");
   const int maxSteps = wholeNumber(text("max-steps"), "--max-steps");
   if (maxMoves < 1) throw ParameterError("--max-moves must be positive");

@@ -190,3 +190,25 @@ TEST_CASE("makeJob gives each tool of a program its cutter, or says which one it
   stray.erase("tool");
   CHECK_THAT(errorOf(sim, stray), Contains("--diameter describes the --tool cutter"));
 }
+
+TEST_CASE("G41 takes its radius from a tool library of any format", "[run][tools]") {
+  // data/tools/three_tools.json (Fusion 360): T1 is a 6 mm flat end mill. The entry from the
+  // origin to X20 with the tool on the left ends a radius (3 mm) left of X20 Y0.
+  test::TempFolder dir("job_comp_library");
+  const std::string program =
+      dir.write("comp.ngc",
+                "G21 G17 G90\nT1 M6\nF300\nG0 X0 Y0 Z5\nG1 Z-1\nG41 D1 G1 X20 Y0\nG1 X40\n"
+                "G40 G1 X50 Y-10\nG0 Z5\nM2\n");
+  const OptionValues v = {{"program", program},
+                          {"tools", ENGAGE_SOURCE_DIR "/data/tools/three_tools.json"},
+                          {"stock", "box:-10,-10,-10,60,40,0"}};
+  const Job job = makeJob(JobCommand::Simulate, v);
+  bool found = false;
+  for (const Move& m : job.path.moves)
+    if (m.line == 6) {
+      CHECK(m.end.x() == Approx(20.0).margin(1e-9));
+      CHECK(m.end.y() == Approx(3.0).margin(1e-9));
+      found = true;
+    }
+  CHECK(found);
+}
