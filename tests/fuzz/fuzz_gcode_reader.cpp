@@ -4,7 +4,7 @@
 //   cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DENGAGE_FUZZ=ON -DENGAGE_TESTS=OFF
 //   cmake --build build-fuzz --target fuzz_gcode_reader
 //   mkdir -p build-fuzz/corpus && build-fuzz/tests/fuzz/fuzz_gcode_reader -max_total_time=600 \
-//       -max_len=4096 build-fuzz/corpus data/gcode/dialects
+//       -max_len=4096 build-fuzz/corpus data/gcode/dialects data/gcode/compensation
 
 #include "engine/gcode/GcodeReader.h"
 
@@ -17,6 +17,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   engage::ReaderOptions options;
   options.maxExecutedLines = 20000;  // loops in fuzzed programs end quickly
   options.maxMoves = 200000;         // and lathe cycles in them stay small
+  // The last byte picks the dialect (LinuxCNC, Fanuc, grbl): all three paths are fuzzed.
+  if (size > 0) options.dialect = static_cast<engage::Dialect>(data[size - 1] % 3);
   try {
     (void)engage::readProgramText(text, "fuzz.ngc", options);
   } catch (const engage::Error&) {
