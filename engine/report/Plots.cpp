@@ -20,7 +20,9 @@ std::string quoted(const std::string& s) {
   return "\"" + s + "\"";
 }
 
-/// The commands that draw one plot as PNG and SVG into temporary names; adds the file names.
+/// The commands that draw one plot as PNG and SVG; adds the file names. engage runs the script
+/// with `part` set to ".part" (temporary names, renamed when all are drawn); by hand it draws
+/// the final names.
 std::string bothFormats(const std::string& name, const std::string& body,
                         std::vector<std::string>& files) {
   std::string script;
@@ -29,7 +31,7 @@ std::string bothFormats(const std::string& name, const std::string& body,
     script +=
         std::string(fmt[0] == 'p' ? "set terminal pngcairo size 1400,700 font ',11'\n"
                                   : "set terminal svg size 1400,700 dynamic font 'sans,11'\n") +
-        "set output " + quoted(file + ".part") + "\n" + body + "unset output\n";
+        "set output " + quoted(file) + ".part\n" + body + "unset output\n";
     files.push_back(file);
   }
   return script;
@@ -60,10 +62,9 @@ void runGnuplot(const std::filesystem::path& dir, const std::string& scriptName,
     f << script;
   }
   const std::string log = scriptName + ".log";
-  const std::string command =
-      "cd " + quoted(dir.string()) + " && gnuplot " +
-      (definitions.empty() ? std::string() : "-e " + quoted(definitions) + " ") +
-      quoted(scriptName) + " 2> " + quoted(log);
+  const std::string command = "cd " + quoted(dir.string()) + " && gnuplot -e " +
+                              quoted("part='.part'; " + definitions) + " " + quoted(scriptName) +
+                              " 2> " + quoted(log);
   const int rc = runShell(command);
   if (rc != 0) {
     // Say what gnuplot said (its last line), and leave no half-drawn plot behind.
@@ -94,6 +95,7 @@ std::vector<std::string> drawCharts(const std::string& folder, const std::vector
                                     const std::string& scriptName) {
   std::vector<std::string> files;
   std::string script =
+      "if (!exists(\"part\")) part = ''\n"
       "set datafile separator ','\nset datafile columnheaders\nset grid\nset key outside top "
       "center horizontal\n";
   for (const Chart& c : charts) {
@@ -129,6 +131,7 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
   // table (PlotSpec::data).
   std::string script =
       "if (!exists(\"data\")) data = 'steps.csv'\n"
+      "if (!exists(\"part\")) part = ''\n"
       "set datafile separator ','\nset datafile columnheaders\nset grid\nset key outside top "
       "center horizontal\n";
   auto plot = [&](const std::string& name, const std::string& body) {
