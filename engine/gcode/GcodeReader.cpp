@@ -968,8 +968,10 @@ class Interpreter final : public gcode::ParameterSource {
         inch_ = inch;
       }
     }
+    // LinuxCNC sets the plane before compensation ("G17 G41 D1" is fine), the rest after.
+    const bool compensatingBefore = comp_.on();
     if (const auto g = w.gIn(7)) compensation(*g, w);
-    if (comp_.on()) refuseWithCompensation(w);
+    if (comp_.on()) refuseWithCompensation(w, compensatingBefore);
     if (const auto g = w.gIn(8)) {
       // The spindle stays where it is: a longer tool puts the tip lower.
       const double previousLength = toolLength_;
@@ -1858,11 +1860,11 @@ class Interpreter final : public gcode::ParameterSource {
   }
 
   /// Codes LinuxCNC refuses while compensation is on.
-  void refuseWithCompensation(const Words& w) {
+  void refuseWithCompensation(const Words& w, bool onBefore) {
     auto refuse = [&](int column, const std::string& what) {
       fail(column, "expected G40 before " + what + ", found cutter radius compensation on");
     };
-    if (const auto g = w.gIn(2)) refuse(w.gColumn(*g), "changing the plane");
+    if (const auto g = w.gIn(2); g && onBefore) refuse(w.gColumn(*g), "changing the plane");
     if (const auto g = w.gIn(8))
       refuse(w.gColumn(*g), "a tool length offset (" + codeName('G', *g) + ")");
     if (const auto g = w.gIn(12)) refuse(w.gColumn(*g), "changing the coordinate system");

@@ -474,6 +474,10 @@ TEST_CASE("cutter radius compensation: the tool a radius to the side, corners as
              Contains("test.ngc:4:5: expected a straight move just after G40"));
   CHECK_THAT(errorOf("G21 F100\nG41.1 D10\nG42.1 D10\n"),
              Contains("test.ngc:3:1: cannot turn cutter radius compensation on when it is on"));
+  // The plane is set before compensation on one line (a common header), not after it.
+  CHECK(errorOf("G21 F100\nG0 X0 Y0\nG17 G41.1 D10 G1 X20 Y0\nG40 G1 X30\n").empty());
+  CHECK_THAT(errorOf("G21 F100\nG0 X0 Y0\nG41.1 D10 G1 X20 Y0\nG18\n"),
+             Contains("test.ngc:4:1: expected G40 before changing the plane"));
   CHECK_THAT(errorOf("G21 F100\nG19 G41.1 D10\n"),
              Contains("expected G17 or G18 (the XY or XZ plane) for cutter radius compensation"));
   CHECK_THAT(errorOf("G21 F100\nG41.1 D10 G1 X20\nT2 M6\n"),
