@@ -1,12 +1,9 @@
 #include "engine/run/Machine.h"
 
 #include "cutters/Error.h"
-#include "engine/run/Output.h"
-
-#include <nlohmann/json.hpp>
+#include "engine/run/JsonFile.h"
 
 #include <cmath>
-#include <set>
 #include <string>
 
 namespace engage {
@@ -20,23 +17,7 @@ Dialect dialectOf(const std::string& name) {
 
 MachineSetup readMachine(const std::string& path) {
   using nlohmann::json;
-  json doc;
-  std::string duplicate;
-  std::vector<std::set<std::string>> keys;
-  const json::parser_callback_t noDuplicates = [&](int, json::parse_event_t event, json& parsed) {
-    if (event == json::parse_event_t::object_start) keys.emplace_back();
-    if (event == json::parse_event_t::object_end && !keys.empty()) keys.pop_back();
-    if (event == json::parse_event_t::key &&
-        !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty())
-      duplicate = parsed.get<std::string>();
-    return true;
-  };
-  try {
-    doc = json::parse(readFile(path), noDuplicates);
-  } catch (const json::exception& e) {
-    throw Error(path + ": not valid JSON: " + e.what());
-  }
-  if (!duplicate.empty()) throw Error(path + ": the key \"" + duplicate + "\" is given twice");
+  const json doc = readJsonFile(path);
   if (!doc.is_object()) throw Error(path + ": expected a JSON object (a machine description)");
   for (const auto& [key, value] : doc.items())
     if (key != "units" && key != "work_offset" && key != "g28" && key != "g30" && key != "start" &&

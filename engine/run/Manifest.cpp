@@ -3,6 +3,7 @@
 #include "engine/physics/Material.h"
 
 #include "cutters/Error.h"
+#include "engine/run/JsonFile.h"
 #include "engine/run/Output.h"
 
 #include <nlohmann/json.hpp>
@@ -141,25 +142,7 @@ ManifestJob readJob(const json& j, const json& defaults, std::size_t i, const fs
 
 std::vector<ManifestJob> readManifest(const std::string& manifest) {
   const fs::path path(manifest);
-  json m;
-  // A key given twice in one object would silently keep only one of its values: refused.
-  std::vector<std::set<std::string>> keys;
-  std::string duplicate;
-  const json::parser_callback_t noDuplicates = [&](int, json::parse_event_t event, json& parsed) {
-    if (event == json::parse_event_t::object_start) keys.emplace_back();
-    if (event == json::parse_event_t::object_end && !keys.empty()) keys.pop_back();
-    if (event == json::parse_event_t::key &&
-        !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty())
-      duplicate = parsed.get<std::string>();
-    return true;
-  };
-  try {
-    m = json::parse(readFile(path), noDuplicates);
-  } catch (const json::exception& e) {  // parse errors, and numbers beyond a double (9e9999)
-    throw Error(path.string() + ": not valid JSON: " + e.what());
-  }
-  if (!duplicate.empty())
-    throw Error(path.string() + ": the key \"" + duplicate + "\" is given twice in one object");
+  json m = readJsonFile(path.string());
   if (!m.is_object() || !m.contains("jobs") || !m["jobs"].is_array())
     throw Error(path.string() + ": expected an object with a \"jobs\" array");
   const json defaults = m.value("defaults", json::object());
