@@ -725,9 +725,12 @@ class Interpreter final : public gcode::ParameterSource {
     }
   }
 
-  /// The file and line of subroutine `label`'s O-sub: in this file, the main file, files
-  /// already read, then <name>.ngc beside the main file or on the search path.
-  std::pair<int, int> findSubroutine(const std::string& label, int column) {
+  /// The file and line where `label` opens as `keyword` ("sub": an O-sub; "program": an M98
+  /// subprogram's O line): in this file, the main file, files already read, then `fileName`
+  /// (if not empty) beside the main file or on the search path, read in. Such a file without
+  /// the label starts at its first line (line -1) when `wholeFile`. {-1, -1}: found nowhere.
+  std::pair<int, int> findLabel(const std::string& label, const char* keyword,
+                                const std::string& fileName, bool wholeFile) {
     int targetFile = -1;
     int targetLine = -1;
     auto findIn = [&](int fi) {
@@ -735,39 +738,44 @@ class Interpreter final : public gcode::ParameterSource {
       const auto it = f.labels.find(label);
       if (it == f.labels.end()) return false;
       for (const auto& [line, kw] : it->second)
-        if (kw == "sub") {
+        if (kw == keyword) {
           targetFile = fi;
           targetLine = line;
           return true;
         }
       return false;
     };
-    if (!findIn(file_) && !findIn(0)) {
-      for (int fi = 1; fi < static_cast<int>(files_.size()) && targetFile < 0; ++fi)
-        findIn(fi);
-      if (targetFile < 0 && label.size() > 2 && label.front() == '<') {
-        const std::string name = label.substr(1, label.size() - 2) + ".ngc";
-        std::vector<std::string> folders{files_[0]->folder};
-        folders.insert(folders.end(), options_.subroutinePath.begin(),
-                       options_.subroutinePath.end());
-        for (const std::string& folder : folders) {
-          const std::filesystem::path p =
-              folder.empty() ? std::filesystem::path(name) : std::filesystem::path(folder) / name;
-          std::error_code ec;
-          if (std::filesystem::is_regular_file(p, ec)) {
-            files_.push_back(makeSource(p.string(), readFile(p.string())));
-            out_.files.push_back(p.string());
-            findIn(static_cast<int>(files_.size()) - 1);
-            break;
-          }
-        }
-      }
+    if (findIn(file_) || findIn(0)) return {targetFile, targetLine};
+    for (int fi = 1; fi < static_cast<int>(files_.size()); ++fi)
+      if (findIn(fi)) return {targetFile, targetLine};
+    if (fileName.empty()) return {-1, -1};
+    std::vector<std::string> folders{files_[0]->folder};
+    folders.insert(folders.end(), options_.subroutinePath.begin(), options_.subroutinePath.end());
+    for (const std::string& folder : folders) {
+      const std::filesystem::path p = folder.empty() ? std::filesystem::path(fileName)
+                                                     : std::filesystem::path(folder) / fileName;
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(p, ec)) continue;
+      files_.push_back(makeSource(p.string(), readFile(p.string())));
+      out_.files.push_back(p.string());
+      const int fi = static_cast<int>(files_.size()) - 1;
+      if (findIn(fi)) return {targetFile, targetLine};
+      return wholeFile ? std::pair<int, int>{fi, -1} : std::pair<int, int>{-1, -1};
     }
-    if (targetFile < 0)
+    return {-1, -1};
+  }
+
+  /// The file and line of subroutine `label`'s O-sub (findLabel; a <name> label may be in
+  /// name.ngc).
+  std::pair<int, int> findSubroutine(const std::string& label, int column) {
+    const bool named = label.size() > 2 && label.front() == '<';
+    const auto found =
+        findLabel(label, "sub", named ? label.substr(1, label.size() - 2) + ".ngc" : "", false);
+    if (found.first < 0)
       fail(column, "expected a subroutine o" + label + " (in this program or as " +
                        (label.front() == '<' ? label.substr(1, label.size() - 2) : label) +
                        ".ngc beside it), found none");
-    return {targetFile, targetLine};
+    return found;
   }
 
   void call(const gcode::OWord& o) {
@@ -1103,39 +1111,7 @@ class Interpreter final : public gcode::ParameterSource {
     }
     if (times == 0) return;
     const std::string label = std::to_string(program);
-    int targetFile = -1, targetLine = -1;
-    auto findIn = [&](int fi) {
-      const SourceFile& f = *files_[static_cast<std::size_t>(fi)];
-      const auto it = f.labels.find(label);
-      if (it == f.labels.end()) return false;
-      for (const auto& [line, kw] : it->second)
-        if (kw == "program") {
-          targetFile = fi;
-          targetLine = line;
-          return true;
-        }
-      return false;
-    };
-    if (!findIn(file_) && !findIn(0))
-      for (int fi = 1; fi < static_cast<int>(files_.size()) && targetFile < 0; ++fi)
-        findIn(fi);
-    if (targetFile < 0) {
-      std::vector<std::string> folders{files_[0]->folder};
-      folders.insert(folders.end(), options_.subroutinePath.begin(), options_.subroutinePath.end());
-      for (const std::string& folder : folders) {
-        const std::filesystem::path p = std::filesystem::path(folder) / (label + ".ngc");
-        std::error_code ec;
-        if (!std::filesystem::is_regular_file(p, ec)) continue;
-        files_.push_back(makeSource(p.string(), readFile(p.string())));
-        out_.files.push_back(p.string());
-        const int fi = static_cast<int>(files_.size()) - 1;
-        if (!findIn(fi)) {
-          targetFile = fi;  // a file without its O line: it starts at its first line
-          targetLine = -1;
-        }
-        break;
-      }
-    }
+    const auto [targetFile, targetLine] = findLabel(label, "program", label + ".ngc", true);
     if (targetFile < 0)
       fail(w.column('P'), "expected a subprogram O" + label + " (in this program or as " + label +
                               ".ngc beside it), found none");
