@@ -349,6 +349,23 @@ void skipLineNumber(const std::string& s, std::size_t& p) {
   }
 }
 
+/// Where a compacted line's words start: after a block-delete '/' and an N word.
+std::size_t wordsStart(const std::string& s) {
+  std::size_t p = 0;
+  if (!s.empty() && s[0] == '/') p = 1;
+  skipLineNumber(s, p);
+  return p;
+}
+
+/// A program number alone at p of a compacted line: an 'o' and only digits to its end
+/// (Fanuc and Haas posts write "O1001 (PART)"; M98 calls such a line's number).
+bool isProgramNumber(const std::string& s, std::size_t p) {
+  if (p + 1 >= s.size() || s[p] != 'o') return false;
+  for (std::size_t i = p + 1; i < s.size(); ++i)
+    if (!std::isdigit(static_cast<unsigned char>(s[i]))) return false;
+  return true;
+}
+
 }  // namespace
 
 Block parseLine(std::string_view line, const ParameterSource& params) {
@@ -374,10 +391,7 @@ Block parseLine(std::string_view line, const ParameterSource& params) {
     std::size_t q = p;
     // A program number alone on its line (Fanuc and Haas posts write "O1001 (PART)" after
     // the '%'): nothing to run.
-    std::size_t digits = p + 1;
-    while (digits < s.size() && std::isdigit(static_cast<unsigned char>(s[digits])))
-      ++digits;
-    if (digits > p + 1 && digits == s.size()) return block;
+    if (isProgramNumber(s, p)) return block;
     if (!readOWordHead(s, q, o.label, o.keyword)) {
       in.setPos(p + 1);
       in.fail(
@@ -452,12 +466,8 @@ bool peekProgramNumber(std::string_view line, std::string& number) {
   try {
     const Compact compact(line, nullptr);
     const std::string& s = compact.text();
-    std::size_t p = 0;
-    if (!s.empty() && s[0] == '/') p = 1;
-    skipLineNumber(s, p);
-    if (p >= s.size() || s[p] != 'o' || p + 1 >= s.size()) return false;
-    for (std::size_t i = p + 1; i < s.size(); ++i)
-      if (!std::isdigit(static_cast<unsigned char>(s[i]))) return false;
+    const std::size_t p = wordsStart(s);
+    if (!isProgramNumber(s, p)) return false;
     const std::size_t first = s.find_first_not_of('0', p + 1);
     number = first == std::string::npos ? "0" : s.substr(first);
     return true;
@@ -470,9 +480,7 @@ bool peekOWord(std::string_view line, std::string& label, std::string& keyword) 
   try {
     const Compact compact(line, nullptr);
     const std::string& s = compact.text();
-    std::size_t p = 0;
-    if (!s.empty() && s[0] == '/') p = 1;
-    skipLineNumber(s, p);
+    std::size_t p = wordsStart(s);
     return readOWordHead(s, p, label, keyword);
   } catch (const ParseFailure&) {
     return false;
