@@ -63,6 +63,11 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
   writeAtomically(dir / "summary.json", summary);
   writeRefedProgram(result, dir);
   w.refedProgram = result.job.scheduling();
+  // The steps the report's plots show, and for a long run the plots' too (below).
+  const bool plotted =
+      which == Job::Outputs::All || (result.job.report && which != Job::Outputs::Summary);
+  const std::vector<std::size_t> shown =
+      plotted ? reportSteps(result, summary) : std::vector<std::size_t>();
   if (which == Job::Outputs::All) {
     w.stockFiles = result.stock != nullptr;
     // gnuplot draws in its own process while the stock files are written (seconds each on a
@@ -71,10 +76,9 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
     // A long run's plots read the steps the report plots (every bucket's extremes): drawing
     // all of CAMotics' tiger (111,279 steps at 1.03 mm) took 4.0 s, and the dexel run 6.0 s
     // against 2.0 s now (one core, medians of three alternating runs).
-    const std::vector<std::size_t> rows = reportSteps(result);
-    if (rows.size() < result.sim.steps.size()) {
+    if (shown.size() < result.sim.steps.size()) {
       ps.data = ".plot_steps.csv";
-      writeAtomically(dir / ps.data, stepsTable(result, &rows));
+      writeAtomically(dir / ps.data, stepsTable(result, &shown));
     }
     auto plots = std::async(std::launch::async, [&ps] { return writePlots(ps); });
     w.openEdges = writeStockFiles(result, dir);
@@ -91,7 +95,7 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
   // The page names the other files: it comes last.
   if (result.job.report && which != Job::Outputs::Summary) {
     writeAtomically(dir / "report.html",
-                    runReportHtml(result, summary, w, which == Job::Outputs::All));
+                    runReportHtml(result, summary, shown, w, which == Job::Outputs::All));
     w.report = true;
   }
   return w;

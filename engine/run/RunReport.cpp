@@ -213,7 +213,7 @@ json table(const RunResult& result, const std::vector<Column>& columns,
 
 }  // namespace
 
-std::vector<std::size_t> reportSteps(const RunResult& result) {
+std::vector<std::size_t> reportSteps(const RunResult& result, const std::string& summaryJsonText) {
   const std::size_t n = result.sim.steps.size();
   std::vector<std::size_t> keep;
   if (n <= kAllSteps) {
@@ -224,7 +224,7 @@ std::vector<std::size_t> reportSteps(const RunResult& result) {
   }
   const std::vector<Column> columns = stepColumns(result);
   std::set<std::size_t> chosen;
-  namedSteps(json::parse(summaryJson(result)), chosen);
+  namedSteps(json::parse(summaryJsonText), chosen);
   // Where the tool changes.
   for (std::size_t i = 1; i < n; ++i)
     if (result.sim.steps[i].tool != result.sim.steps[i - 1].tool) chosen.insert(i);
@@ -256,7 +256,8 @@ std::vector<std::size_t> reportSteps(const RunResult& result) {
 }
 
 std::string runReportHtml(const RunResult& result, const std::string& summaryJsonText,
-                          const WrittenOutputs& written, bool withSurface) {
+                          const std::vector<std::size_t>& kept, const WrittenOutputs& written,
+                          bool withSurface) {
   const Job& job = result.job;
   const UnitSystem sys = job.units;
   json data;
@@ -307,7 +308,6 @@ std::string runReportHtml(const RunResult& result, const std::string& summaryJso
   data["limits"] = limits;
 
   const std::vector<Column> columns = stepColumns(result);
-  const std::vector<std::size_t> kept = reportSteps(result);
   data["series"] = table(result, columns, kept);
   data["series_steps"] = {{"kept", kept.size()},
                           {"of", result.sim.steps.size()},

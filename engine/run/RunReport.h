@@ -29,13 +29,15 @@ inline constexpr std::size_t kAllSteps = 20000;
 inline constexpr std::size_t kBuckets = 4000;
 inline constexpr std::size_t kMaxTriangles = 150000;
 
-/// The page's text. `summaryJson` is summary.json's text; `written` the files written (named
-/// on the page); `withSurface` adds the 3D view (needs the run's stock).
+/// The page's text. `summaryJson` is summary.json's text; `steps` the steps its plots show
+/// (reportSteps); `written` the files written (named on the page); `withSurface` adds the 3D
+/// view (needs the run's stock).
 std::string runReportHtml(const RunResult& result, const std::string& summaryJson,
-                          const WrittenOutputs& written, bool withSurface);
+                          const std::vector<std::size_t>& steps, const WrittenOutputs& written,
+                          bool withSurface);
 
 /// The steps the plots keep (all up to kAllSteps, else the extremes of each bucket and the
-/// peaks), in order.
-std::vector<std::size_t> reportSteps(const RunResult& result);
+/// peaks that `summaryJson`, summary.json's text, names), in order.
+std::vector<std::size_t> reportSteps(const RunResult& result, const std::string& summaryJson);
 
 }  // namespace engage

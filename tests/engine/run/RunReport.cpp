@@ -71,7 +71,8 @@ TEST_CASE("a run's page carries its summary, its steps and its cut surface", "[r
                                                             {"diameter", "6mm"},
                                                             {"stock", "box:-10,-10,-10,40,10,0"}}));
   const std::string summary = summaryJson(r);
-  const json data = pageData(runReportHtml(r, summary, WrittenOutputs{}, true));
+  const json data =
+      pageData(runReportHtml(r, summary, reportSteps(r, summary), WrittenOutputs{}, true));
   CHECK(data["summary"] == json::parse(summary));
   // Fewer steps than kAllSteps: every one, in order, with its line.
   const json& s = data["series"];
@@ -134,7 +135,7 @@ TEST_CASE("a long run's plots keep every bucket's extremes and the peaks", "[run
                                                             {"step", "0.01mm"}}));
   const std::size_t n = r.sim.steps.size();
   REQUIRE(n > kAllSteps);
-  const std::vector<std::size_t> kept = reportSteps(r);
+  const std::vector<std::size_t> kept = reportSteps(r, summaryJson(r));
   CHECK(std::is_sorted(kept.begin(), kept.end()));
   CHECK(kept.size() < 3 * kBuckets);  // about two a bucket here (highest and lowest MRR)
   CHECK(kept.front() == 0);
