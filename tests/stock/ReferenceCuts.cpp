@@ -1,0 +1,165 @@
+// Both stock models against the exact reference (tests/support/ExactSweep.h), per move, on the
+// thin- and grazing-cut programs of data/gcode/thin at the default cell (D/20: 0.3 mm for the
+// 6 mm cutters, 0.2 mm for the taper's 4 mm tip). The bounds are issue 18's: the program's total
+// within 0.1 %; every move that removes at least 1 mm^3 within 1 %, and 95 % of them within 0.5 %;
+// smaller moves within two cell volumes; a move that removes nothing in the reference removes
+// exactly nothing. The reference's own error: its cutter is inscribed, at most facetDeviation()
+// (0.00023 mm for the flats, 0.00046 mm for the ball's 2-degree chords) inside the true one.
+
+#include "tests/support/ReferenceCuts.h"
+#include "tests/support/ExactSweep.h"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+using namespace engage;
+
+namespace {
+
+/// Where a model misses issue 18's bounds today (open: its item 2), with how far: the test
+/// holds the miss to that, and fails once the bound is met, so that the entry goes. `line` > 0:
+/// that move's relative error, or for a move that removes nothing in the reference its volume
+/// in mm^3; 0: the program's total relative error; -1: the share of moves of 1 mm^3 or more
+/// within 0.5 % (`bound` the least share accepted).
+struct KnownMiss {
+  const char* model;
+  const char* program;
+  int line;
+  double bound;
+};
+// Measured with build/tests/bench/bench_thin_cuts --moves (D/20), each bound the error rounded up.
+// The voxels: thin ramps from the top face +18.7 % and +4.4 %, skims -2 to -4.2 %, the first
+// 0.05 mm peck -5.8 %, floor re-cuts -2.2 to +1.1 %; retracts that cannot reach material take
+// 3e-6 and 6e-6 mm^3. The dexels: a ball's retract straight up takes 0.034 mm^3 there (each
+// step's band pieces fall at other heights: the same cover, cut into other pieces, is larger
+// somewhere).
+constexpr KnownMiss kKnownMisses[] = {
+    {"voxel", "floor_recut flat", 9, 0.025},   {"voxel", "floor_recut flat", 29, 0.03},
+    {"voxel", "floor_recut flat", 31, 0.02},   {"voxel", "floor_recut flat", -1, 0.75},
+    {"voxel", "skims_ramps flat", 8, 0.06},    {"voxel", "skims_ramps flat", 12, 0.25},
+    {"voxel", "skims_ramps flat", 16, 0.06},   {"voxel", "skims_ramps flat", 24, 0.03},
+    {"voxel", "skims_ramps flat", 28, 0.05},   {"voxel", "skims_ramps flat", 0, 0.015},
+    {"voxel", "skims_ramps flat", -1, 0.14},   {"voxel", "pecks_grazes flat", 8, 0.08},
+    {"voxel", "pecks_grazes flat", 11, 0.025}, {"voxel", "pecks_grazes flat", -1, 0.5},
+    {"voxel", "skims_ramps flat", 17, 1e-5},   {"voxel", "ball_steps ball", 22, 1e-5},
+    {"dexel", "ball_steps ball", 22, 0.05},
+};
+
+const KnownMiss* knownMiss(const std::string& model, const std::string& program, int line) {
+  for (const KnownMiss& k : kKnownMisses)
+    if (model == k.model && program == k.program && line == k.line) return &k;
+  return nullptr;
+}
+
+/// Checks `error` against issue 18's bound `strict`, or, for a known miss, against its bound,
+/// requiring that the miss is still one.
+void checkBound(double error, double strict, const KnownMiss* known) {
+  if (!known) {
+    CHECK(error <= strict);
+    return;
+  }
+  CHECK(error > strict);  // met now: drop the entry from kKnownMisses
+  CHECK(error <= known->bound);
+}
+
+void checkCase(const std::string& name, const std::string& model) {
+  const auto cases = test::referenceCases(ENGAGE_SOURCE_DIR);
+  const auto c = std::find_if(cases.begin(), cases.end(),
+                              [&](const test::ReferenceCase& k) { return k.name == name; });
+  REQUIRE(c != cases.end());
+  const double h = 2.0 * c->cutter.radius() / 20.0;
+  const std::vector<double>& exact = test::exactPerMove(*c);
+  auto stock = test::boxStock(model, c->stock, h);
+  const std::vector<double> measured = test::measuredPerMove(*c, *stock);
+  const Toolpath path = test::casePath(*c);
+  REQUIRE(measured.size() == exact.size());
+  double exactTotal = 0.0, measuredTotal = 0.0;
+  std::size_t big = 0, bigWithinHalf = 0;
+  for (std::size_t i = 0; i < exact.size(); ++i) {
+    const int line = path.moves[i].line;
+    INFO(model << " " << name << " line " << line << ": exact " << exact[i] << " mm3, measured "
+               << measured[i] << " mm3");
+    exactTotal += exact[i];
+    measuredTotal += measured[i];
+    const double err = std::abs(measured[i] - exact[i]);
+    const KnownMiss* known = knownMiss(model, name, line);
+    if (exact[i] >= 1.0) {
+      ++big;
+      if (err <= 0.005 * exact[i]) ++bigWithinHalf;
+      checkBound(err / exact[i], 0.01, known);
+    } else if (exact[i] > 0.0) {
+      checkBound(err, 2.0 * h * h * h, known);
+    } else {
+      checkBound(std::abs(measured[i]), 0.0, known);
+    }
+  }
+  INFO(model << " " << name << ": total exact " << exactTotal << " mm3, measured " << measuredTotal
+             << " mm3; " << bigWithinHalf << " of " << big
+             << " moves of 1 mm3 or more within 0.5 %");
+  checkBound(std::abs(measuredTotal / exactTotal - 1.0), 0.001, knownMiss(model, name, 0));
+  const double shareWithin = static_cast<double>(bigWithinHalf) / static_cast<double>(big);
+  if (const KnownMiss* k = knownMiss(model, name, -1)) {
+    CHECK(shareWithin < 0.95);  // met now: drop the entry from kKnownMisses
+    CHECK(shareWithin >= k->bound);
+  } else {
+    CHECK(shareWithin >= 0.95);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("the exact reference: a slot's volume in closed form", "[reference]") {
+  // A 6 mm flat end mill (256-gon: width 6 mm across X, exactly, as a vertex lies on the Y axis)
+  // cutting a 2 mm deep slot through a 40 mm box along X: 40 x 6 x 2 = 480 mm^3, to the
+  // exact kernel's conversion to double; a second pass 0.5 mm to the side removes 40 x 0.5 x 2.
+  Toolpath path;
+  Move a;
+  a.kind = MoveKind::Line;
+  a.start = {-5.0, 10.0, 8.0};
+  a.end = {45.0, 10.0, 8.0};
+  Move b = a;
+  b.start = {45.0, 10.5, 8.0};
+  b.end = {-5.0, 10.5, 8.0};
+  path.moves = {a, b};
+  Box3 box;
+  box.max = {40.0, 30.0, 10.0};
+  const AptCutter flat = AptCutter::flat(6.0, 20.0);
+  const std::vector<double> v = test::exactRemovals(path, {flat, flat}, box);
+  CHECK(v[0] == Approx(480.0).epsilon(1e-12));
+  CHECK(v[1] == Approx(40.0).epsilon(1e-12));
+  CHECK(test::facetDeviation(flat) == Approx(3.0 * (1.0 - std::cos(3.14159265358979 / 256))));
+}
+
+TEST_CASE("both stock models against the exact reference: floor_recut flat", "[reference]") {
+  checkCase("floor_recut flat", "voxel");
+  checkCase("floor_recut flat", "dexel");
+}
+
+TEST_CASE("both stock models against the exact reference: skims_ramps flat", "[reference]") {
+  checkCase("skims_ramps flat", "voxel");
+  checkCase("skims_ramps flat", "dexel");
+}
+
+TEST_CASE("both stock models against the exact reference: pecks_grazes flat", "[reference]") {
+  checkCase("pecks_grazes flat", "voxel");
+  checkCase("pecks_grazes flat", "dexel");
+}
+
+TEST_CASE("both stock models against the exact reference: ball_steps ball", "[reference]") {
+  checkCase("ball_steps ball", "voxel");
+  checkCase("ball_steps ball", "dexel");
+}
+
+TEST_CASE("both stock models against the exact reference: bull_taper bull", "[reference]") {
+  checkCase("bull_taper bull", "voxel");
+  checkCase("bull_taper bull", "dexel");
+}
+
+TEST_CASE("both stock models against the exact reference: bull_taper taper", "[reference]") {
+  checkCase("bull_taper taper", "voxel");
+  checkCase("bull_taper taper", "dexel");
+}
