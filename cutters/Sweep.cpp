@@ -233,6 +233,28 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
   }
 }
 
+double Sweep::support(const Eigen::Vector3d& n) const {
+  // The cutter's support is the profile's largest s rho + n_z z, s = |n_xy| (the profile
+  // turned to face n): at a segment's ends, or inside an arc where its normal is (s, n_z).
+  const Eigen::Vector2d w(n.head<2>().norm(), n.z());
+  double best = -std::numeric_limits<double>::infinity();
+  for (const ProfileSegment& seg : cutter_.profile()) {
+    best = std::max({best, w.dot(seg.start), w.dot(seg.end)});
+    if (seg.kind == ProfileSegment::Kind::Arc && w.squaredNorm() > 0.0) {
+      const Eigen::Vector2d top = seg.center + seg.radius * w.normalized();
+      // On the arc (counter-clockwise from start to end) when it lies between them.
+      const Eigen::Vector2d a = seg.start - seg.center, b = seg.end - seg.center,
+                            c = top - seg.center;
+      auto angle = [](const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
+        double t = std::atan2(from.x() * to.y() - from.y() * to.x(), from.dot(to));
+        return t < 0.0 ? t + 2.0 * 3.14159265358979323846 : t;
+      };
+      if (angle(a, c) <= angle(a, b)) best = std::max(best, w.dot(top));
+    }
+  }
+  return best + std::max(n.dot(path_.start), n.dot(path_.end));
+}
+
 double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
                              Eigen::Matrix3d* curvature) const {
   return distance(p, gradient, curvature, nullptr);

@@ -87,6 +87,14 @@ class Sweep {
   /// World bounding box of the swept solid, mm.
   Box3 bounds() const { return bounds_; }
   const StepPath& path() const { return path_; }
+  /// Whether the swept solid is convex: a straight step of a convex cutter (its sides do not
+  /// lean inward) that changes height (a height-keeping step's solid is convex too, but is
+  /// answered in closed form).
+  bool convexLine() const { return convexLine_; }
+  /// For a convexLine() step, the support function of the swept solid: the largest n . x over
+  /// its points x (mm), for a unit direction n; the plane n . x = support(n) touches the solid
+  /// and has all of it on one side, exactly (the hull of the cutter at the step's two ends).
+  double support(const Eigen::Vector3d& n) const;
   const AptCutter& cutter() const { return cutter_; }
 
  private:

@@ -7,7 +7,7 @@
 // the smaller ones, the worst error in cell volumes; and the most removed by a move that removes
 // nothing in the reference. With --moves, every move's figures first; with --faceting, the
 // reference against itself at a coarser faceting instead.
-//   build/tests/bench/bench_thin_cuts [--moves | --faceting]
+//   build/tests/bench/bench_thin_cuts [--moves | --faceting [PROGRAM]]
 
 #include "tests/support/ExactSweep.h"
 #include "tests/support/ReferenceCuts.h"
@@ -34,7 +34,14 @@ double quantile(std::vector<double> v, double q) {
 
 int main(int argc, char** argv) {
   const bool moves = argc > 1 && std::strcmp(argv[1], "--moves") == 0;
-  const std::vector<test::ReferenceCase> cases = test::referenceCases(ENGAGE_SOURCE_DIR);
+  // An optional last argument keeps the programs whose name contains it.
+  std::vector<test::ReferenceCase> cases = test::referenceCases(ENGAGE_SOURCE_DIR);
+  if (argc > 2)
+    cases.erase(std::remove_if(cases.begin(), cases.end(),
+                               [&](const test::ReferenceCase& c) {
+                                 return c.name.find(argv[argc - 1]) == std::string::npos;
+                               }),
+                cases.end());
   if (argc > 1 && std::strcmp(argv[1], "--faceting") == 0) {
     // The reference's own error: the default faceting against one twice as coarse (half the
     // ring vertices, twice the chord angle). The error falls as the square of the facet size,

@@ -183,3 +183,26 @@ TEST_CASE("the swept surface's curvature at the point nearest", "[cutters]") {
         Approx(1.0 / 3.0).epsilon(1e-9));
   CHECK(trace(capsule, {5.0, 3.02, 2.5}) == 0.0);  // beside: the side swept flat
 }
+
+TEST_CASE("the support function of a straight step's swept solid", "[cutters]") {
+  // The swept solid of a straight step is the hull of the cutter at its two ends, so its
+  // support in a direction n is the larger of the two copies'. Hand-computed for a 6 mm flat
+  // end mill (flute length 20: its profile's corners at rho 3, z 0 and 20) and a 6 mm ball
+  // (centre 3 above the tip: in a direction at theta from straight down, 3 - 3 cos theta).
+  StepPath p;
+  p.start = {1.0, 2.0, 5.0};
+  p.end = {11.0, 2.0, 4.0};  // a ramp down along +X
+  const Sweep flat(AptCutter::flat(6.0, 20.0), p, 0.3);
+  CHECK(flat.convexLine());
+  CHECK(flat.support({0.0, 0.0, -1.0}) == Approx(-4.0));  // the end's flat bottom
+  CHECK(flat.support({0.0, 0.0, 1.0}) == Approx(25.0));   // the start's top
+  CHECK(flat.support({1.0, 0.0, 0.0}) == Approx(14.0));   // the end's side
+  CHECK(flat.support({0.0, -1.0, 0.0}) == Approx(1.0));   // a side of both
+  const double c = std::cos(0.3), s = std::sin(0.3);
+  // Down and back (-X): the rim point facing -X of whichever copy reaches further, 3 s out.
+  CHECK(flat.support({-s, 0.0, -c}) ==
+        Approx(std::max(-s * 1.0 - c * 5.0, -s * 11.0 - c * 4.0) + 3.0 * s));
+  const Sweep ball(AptCutter::ball(6.0, 20.0), p, 0.3);
+  const Eigen::Vector3d n(s, 0.0, -c);
+  CHECK(ball.support(n) == Approx(3.0 - 3.0 * c + std::max(n.dot(p.start), n.dot(p.end))));
+}
