@@ -28,10 +28,12 @@ struct Faceting {
 /// over its arcs (a chord's sag).
 double facetDeviation(const AptCutter& cutter, const Faceting& faceting = {});
 
-/// Per move of `path`, the volume (mm^3) that the cutter of the move's tool removes from what
-/// remains of the box `stock` after the moves before it; the first move's start copy is part of
-/// its hull. Every move must be a straight line (Rapid or Line); `cutterOf(tool)` gives the
-/// cutter (taken convex: its profile's hull is used). Throws std::invalid_argument otherwise.
+/// Per move of `path`, the volume (mm^3) that move i's cutter `cutterOfMove[i]` removes from
+/// what remains of the box `stock` after the moves before it (every move's hull has both its end
+/// copies, the first move's start included). Every move must be a straight line (Rapid or
+/// Line), and one cutter given per move: std::invalid_argument otherwise. Cutters are taken
+/// convex (the hull of their profile's points). With ENGAGE_EXACT_TRACE set in the environment,
+/// each move's volume is printed to stderr as it is computed (the ball's take minutes).
 std::vector<double> exactRemovals(const Toolpath& path, const std::vector<AptCutter>& cutterOfMove,
                                   const Box3& stock, const Faceting& faceting = {});
 
