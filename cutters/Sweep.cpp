@@ -247,7 +247,7 @@ double Sweep::support(const Eigen::Vector3d& n) const {
                             c = top - seg.center;
       auto angle = [](const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
         double t = std::atan2(from.x() * to.y() - from.y() * to.x(), from.dot(to));
-        return t < 0.0 ? t + 2.0 * 3.14159265358979323846 : t;
+        return t < 0.0 ? t + kTwoPi : t;
       };
       if (angle(a, c) <= angle(a, b)) best = std::max(best, w.dot(top));
     }

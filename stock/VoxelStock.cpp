@@ -353,6 +353,39 @@ double materialShare(const HalfSpace q[2], bool united, const HalfSpace* extra, 
   return v;
 }
 
+/// Of the pairs of planes offered (each with the serial of the removal that made each plane,
+/// and whether the material is inside both or inside either), the one whose material's share
+/// of the cube is nearest `left`, what a cut left; the first offered wins a tie.
+class NearestPair {
+ public:
+  explicit NearestPair(double left) : left_(left) {}
+  void offer(const HalfSpace& a, int madeA, const HalfSpace& b, int madeB, bool united) {
+    const HalfSpace pair[2] = {a, b};
+    const double share = united ? materialShare(pair, true, nullptr, 0) : cubeFraction(pair, 2);
+    if (share_ < 0.0 || std::abs(share - left_) < std::abs(share_ - left_)) {
+      q_[0] = a;
+      q_[1] = b;
+      made_[0] = madeA;
+      made_[1] = madeB;
+      united_ = united;
+      share_ = share;
+    }
+  }
+  /// Whether any pair was offered.
+  bool any() const { return share_ >= 0.0; }
+  /// Stores the chosen pair as the voxel's planes.
+  void store(LeafPlanes& planes, openvdb::Index offset) const {
+    planes.set(offset, q_[0], made_[0], q_[1], made_[1], share_, united_);
+  }
+
+ private:
+  double left_;
+  HalfSpace q_[2];
+  int made_[2] = {0, 0};
+  bool united_ = false;
+  double share_ = -1.0;
+};
+
 /// Stores as the voxel's planes what the cut (inside `faces` half-spaces, taking `cutShare`)
 /// leaves of a voxel it alone bounds: a wedge's floor-or-wall corner exactly, else the one
 /// plane kept() gives.
@@ -394,19 +427,11 @@ double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   const double left = held - taken;
   // What is left is floor or wall, less the cut: as the corner of one old plane and one of
   // the cut's faces, the pair whose share is nearest.
-  int bestI = 0, bestJ = 0;
-  double bestShare = -1.0;
+  NearestPair best(left);
   for (int i = 0; i < 2; ++i)
-    for (int j = 0; j < faces; ++j) {
-      const HalfSpace pair[2] = {q[i], cut[j].complement()};
-      const double share = materialShare(pair, true, nullptr, 0);
-      if (bestShare < 0.0 || std::abs(share - left) < std::abs(bestShare - left)) {
-        bestShare = share;
-        bestI = i;
-        bestJ = j;
-      }
-    }
-  planes.set(offset, q[bestI], made[bestI], cut[bestJ].complement(), serial, bestShare, true);
+    for (int j = 0; j < faces; ++j)
+      best.offer(q[i], made[i], cut[j].complement(), serial, true);
+  best.store(planes, offset);
   return before * std::max(0.0, left) / held;
 }
 
@@ -612,30 +637,18 @@ const CornerProbe& probeCorner(const Sweep& sweep, const Coord& corner, double h
   // Keep the pair of planes whose material's share is nearest what is left: an old plane and
   // the plane leaving the cut's share, an old plane and a face of a convex cut's wedge, or the
   // wedge's own inside corner.
-  HalfSpace best[2] = {HalfSpace{}, kept()};
-  int bestMade[2] = {kStockFace, serial};
-  bool bestUnited = false;
-  double bestShare = -1.0;
-  auto consider = [&](const HalfSpace& a, int madeA, const HalfSpace& b, bool united) {
-    const HalfSpace pair[2] = {a, b};
-    const double share = united ? materialShare(pair, true, nullptr, 0) : cubeFraction(pair, 2);
-    if (bestShare < 0.0 || std::abs(share - left) < std::abs(bestShare - left)) {
-      best[0] = a;
-      best[1] = b;
-      bestMade[0] = madeA;
-      bestUnited = united;
-      bestShare = share;
-    }
-  };
+  NearestPair best(left);
   for (int i = 0; i < 2; ++i) {
     if (m.q[i].n.squaredNorm() == 0.0) continue;
-    consider(m.q[i], m.made[i], kept(), false);
+    best.offer(m.q[i], m.made[i], kept(), serial, false);
     for (int j = 0; j < wedge; ++j)
-      consider(m.q[i], m.made[i], hull[static_cast<std::size_t>(j)].complement(), false);
+      best.offer(m.q[i], m.made[i], hull[static_cast<std::size_t>(j)].complement(), serial, false);
   }
-  if (wedge == 2) consider(hull[0].complement(), serial, hull[1].complement(), true);
-  planes.set(offset, best[0], bestMade[0], best[1], bestMade[1],
-             bestShare >= 0.0 ? bestShare : 1.0 - cutShare, bestUnited);
+  if (wedge == 2) best.offer(hull[0].complement(), serial, hull[1].complement(), serial, true);
+  if (best.any())
+    best.store(planes, offset);
+  else
+    planes.set(offset, HalfSpace{}, kStockFace, kept(), serial, 1.0 - cutShare);
   return before * left / m.held;
 }
 
@@ -768,24 +781,12 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
     // Across a flat bottom's rim: what is left is the old material less a wedge. Keep the
     // two planes whose material's share is nearest: an old plane and one face of the cut
     // (a floor the rim ran along), or the wedge's own inside corner.
-    HalfSpace best[2] = {cut[0].complement(), cut[1].complement()};
-    int bestMade[2] = {serial, serial};
-    bool bestUnited = true;
-    double bestShare = materialShare(best, true, nullptr, 0);
+    NearestPair best(left);
+    best.offer(cut[0].complement(), serial, cut[1].complement(), serial, true);
     for (int i = 0; i < 2; ++i)
-      for (int j = 0; j < 2 && m[i].n.squaredNorm() > 0.0; ++j) {
-        const HalfSpace pair[2] = {m[i], cut[j].complement()};
-        const double share = cubeFraction(pair, 2);
-        if (std::abs(share - left) < std::abs(bestShare - left)) {
-          best[0] = pair[0];
-          best[1] = pair[1];
-          bestMade[0] = made[i];
-          bestMade[1] = serial;
-          bestUnited = false;
-          bestShare = share;
-        }
-      }
-    planes.set(offset, best[0], bestMade[0], best[1], bestMade[1], bestShare, bestUnited);
+      for (int j = 0; j < 2 && m[i].n.squaredNorm() > 0.0; ++j)
+        best.offer(m[i], made[i], cut[j].complement(), serial, false);
+    best.store(planes, offset);
     return before * std::max(0.0, left) / held;
   }
   // Keep the cut's plane and the earlier plane that bounds the rest more tightly (by

@@ -24,16 +24,6 @@
 using namespace engage;
 using test::line;
 
-namespace {
-
-/// A box of stock in the named model at cell size h.
-std::unique_ptr<Stock> makeStock(const std::string& model, const Box3& b, double h) {
-  if (model == "voxel") return std::make_unique<VoxelStock>(VoxelStock::box(b, h));
-  return std::make_unique<DexelStock>(DexelStock::box(b, h));
-}
-
-}  // namespace
-
 int main() {
   constexpr double kPi = 3.14159265358979323846;
   const Eigen::Vector3d dir(std::cos(kPi / 6), std::sin(kPi / 6), 0.0);
@@ -50,7 +40,7 @@ int main() {
         Box3 b;
         b.min = {-30, -30, helix ? -12.0 : -6.0};  // the bore goes 6 mm down
         b.max = {30, 30, 0};
-        const std::unique_ptr<Stock> stock = makeStock(model, b, h);
+        const std::unique_ptr<Stock> stock = test::boxStock(model, b, h);
         Stock& s = *stock;
         if (helix) {
           // Six turns; the last two are measured (the first four reach steady state).
@@ -133,7 +123,7 @@ int main() {
         Box3 b;
         b.min = {-30, -30, -10};
         b.max = {30, 30, 0};
-        const auto stock = makeStock(model, b, h);
+        const auto stock = test::boxStock(model, b, h);
         const Eigen::Vector3d slope = d + std::tan(alpha) * Eigen::Vector3d(0, 0, -1);
         double total = 0.0;
         const int steps = 30;
@@ -163,7 +153,7 @@ int main() {
         Box3 b;
         b.min = {-8, -8, -8};
         b.max = {8, 8, 0};
-        const auto stock = makeStock(model, b, h);
+        const auto stock = test::boxStock(model, b, h);
         const Eigen::Vector3d centre(h * frac(k * 0.7548776662), h * frac(k * 0.5698402910), 0.0);
         const std::vector<double> v = test::helix(*stock, c, centre, 1.2, 1.0, 6.0, L);
         const double expected = test::helixSteadyStep(1.2, 3.0, 1.0, L);

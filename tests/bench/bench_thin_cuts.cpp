@@ -9,6 +9,7 @@
 // reference against itself at a coarser faceting instead.
 //   build/tests/bench/bench_thin_cuts [--moves | --faceting [PROGRAM]]
 
+#include "tests/stock/StockTestSupport.h"
 #include "tests/support/ExactSweep.h"
 #include "tests/support/ReferenceCuts.h"
 
@@ -82,8 +83,8 @@ int main(int argc, char** argv) {
         const std::vector<double>& exact = test::exactPerMove(c);
         const double h = 2.0 * c.cutter.radius() / fraction;
         auto stock = test::boxStock(model, c.stock, h);
-        const std::vector<double> measured = test::measuredPerMove(c, *stock);
         const Toolpath path = test::casePath(c);
+        const std::vector<double> measured = test::measuredPerMove(c, path, *stock);
         double exactTotal = 0.0, measuredTotal = 0.0;
         for (std::size_t i = 0; i < exact.size(); ++i) {
           exactTotal += exact[i];

@@ -10,6 +10,7 @@
 // default faceting (the error falls as the square of the facet) about a quarter of that.
 
 #include "tests/support/ReferenceCuts.h"
+#include "tests/stock/StockTestSupport.h"
 #include "tests/support/ExactSweep.h"
 
 #include <catch2/catch.hpp>
@@ -78,8 +79,8 @@ void checkCase(const std::string& name, const std::string& model) {
   const double h = 2.0 * c->cutter.radius() / 20.0;
   const std::vector<double>& exact = test::exactPerMove(*c);
   auto stock = test::boxStock(model, c->stock, h);
-  const std::vector<double> measured = test::measuredPerMove(*c, *stock);
   const Toolpath path = test::casePath(*c);
+  const std::vector<double> measured = test::measuredPerMove(*c, path, *stock);
   REQUIRE(measured.size() == exact.size());
   double exactTotal = 0.0, measuredTotal = 0.0;
   std::size_t big = 0, bigWithinHalf = 0;

@@ -1,15 +1,26 @@
 #pragma once
-// Helpers shared by the stock tests (tests/stock/VoxelStock.cpp, tests/stock/DexelStock.cpp):
-// straight passes cut at 30 degrees to the grid, and the per-step errors against a closed form.
+// Helpers shared by the stock tests (tests/stock/VoxelStock.cpp, tests/stock/DexelStock.cpp,
+// the thin-cut reference) and the stock benchmarks: a box of either model, straight passes cut
+// at 30 degrees to the grid, and the per-step errors against a closed form.
 
 #include "cutters/Sweep.h"
+#include "stock/DexelStock.h"
 #include "stock/Stock.h"
+#include "stock/VoxelStock.h"
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <string>
 #include <vector>
 
 namespace engage::test {
+
+/// A box stock of the named model ("voxel", else dexels) at cell size h.
+inline std::unique_ptr<Stock> boxStock(const std::string& model, const Box3& box, double h) {
+  if (model == "voxel") return std::make_unique<VoxelStock>(VoxelStock::box(box, h));
+  return std::make_unique<DexelStock>(DexelStock::box(box, h));
+}
 
 constexpr double kPi = 3.14159265358979323846;
 const Eigen::Vector3d kDir(std::cos(kPi / 6), std::sin(kPi / 6), 0.0);  // 30 deg to the grid

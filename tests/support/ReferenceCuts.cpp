@@ -2,8 +2,6 @@
 
 #include "engine/gcode/GcodeReader.h"
 #include "engine/sim/Simulation.h"
-#include "stock/DexelStock.h"
-#include "stock/VoxelStock.h"
 #include "tests/support/ExactSweep.h"
 
 #include <map>
@@ -45,13 +43,7 @@ const std::vector<double>& exactPerMove(const ReferenceCase& c) {
   return it->second;
 }
 
-std::unique_ptr<Stock> boxStock(const std::string& model, const Box3& box, double h) {
-  if (model == "voxel") return std::make_unique<VoxelStock>(VoxelStock::box(box, h));
-  return std::make_unique<DexelStock>(DexelStock::box(box, h));
-}
-
-std::vector<double> measuredPerMove(const ReferenceCase& c, Stock& stock) {
-  const Toolpath path = casePath(c);
+std::vector<double> measuredPerMove(const ReferenceCase& c, const Toolpath& path, Stock& stock) {
   const SimulationResult r = simulate(path, c.cutter, stock, SimulationOptions{});
   std::vector<double> perMove(path.moves.size(), 0.0);
   for (const StepRecord& s : r.steps)

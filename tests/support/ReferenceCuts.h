@@ -9,7 +9,6 @@
 #include "engine/gcode/Toolpath.h"
 #include "stock/Stock.h"
 
-#include <memory>
 #include <string>
 #include <vector>
 
@@ -31,10 +30,8 @@ const std::vector<double>& exactPerMove(const ReferenceCase& c);
 /// The case's tool path.
 Toolpath casePath(const ReferenceCase& c);
 
-/// A box stock of the named model ("voxel" or "dexel") at cell size h.
-std::unique_ptr<Stock> boxStock(const std::string& model, const Box3& box, double h);
-
-/// Per move, the removal a stock model measures running the case (simulate(), default step).
-std::vector<double> measuredPerMove(const ReferenceCase& c, Stock& stock);
+/// Per move of `path` (the case's, casePath()), the removal a stock model measures running it
+/// with the case's cutter (simulate(), default step).
+std::vector<double> measuredPerMove(const ReferenceCase& c, const Toolpath& path, Stock& stock);
 
 }  // namespace engage::test

@@ -7,7 +7,7 @@
 
 #include "cutters/Sweep.h"
 #include "stock/DexelStock.h"
-#include "stock/VoxelStock.h"
+#include "tests/stock/StockTestSupport.h"
 
 #include <catch2/catch.hpp>
 
@@ -26,11 +26,7 @@ std::unique_ptr<Stock> cutBlock(bool voxel, double yc) {
   Box3 b;
   b.min = {-30, -20, -20};
   b.max = {30, 20, 0};
-  std::unique_ptr<Stock> s;
-  if (voxel)
-    s = std::make_unique<VoxelStock>(VoxelStock::box(b, h));
-  else
-    s = std::make_unique<DexelStock>(DexelStock::box(b, h));
+  std::unique_ptr<Stock> s = test::boxStock(voxel ? "voxel" : "dexel", b, h);
   const AptCutter flat = AptCutter::flat(D, 20.0);
   StepPath p;
   p.start = {-40.0, yc, -ap};
