@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -33,8 +34,13 @@ double quantile(std::vector<double> v, double q) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   const bool moves = argc > 1 && std::strcmp(argv[1], "--moves") == 0;
+  const bool faceting = argc > 1 && std::strcmp(argv[1], "--faceting") == 0;
+  if (argc > 3 || (argc > 1 && !moves && !faceting)) {
+    std::fprintf(stderr, "usage: bench_thin_cuts [--moves | --faceting [PROGRAM]]\n");
+    return 2;
+  }
   // An optional last argument keeps the programs whose name contains it.
   std::vector<test::ReferenceCase> cases = test::referenceCases(ENGAGE_SOURCE_DIR);
   if (argc > 2)
@@ -43,7 +49,11 @@ int main(int argc, char** argv) {
                                  return c.name.find(argv[argc - 1]) == std::string::npos;
                                }),
                 cases.end());
-  if (argc > 1 && std::strcmp(argv[1], "--faceting") == 0) {
+  if (cases.empty()) {
+    std::fprintf(stderr, "bench_thin_cuts: no program's name contains '%s'\n", argv[argc - 1]);
+    return 2;
+  }
+  if (faceting) {
     // The reference's own error: the default faceting against one twice as coarse (half the
     // ring vertices, twice the chord angle). The error falls as the square of the facet size,
     // so the default's is about a quarter of the difference printed.
@@ -116,5 +126,15 @@ int main(int argc, char** argv) {
           worstSmallAt.c_str(), worstNothing);
       std::fflush(stdout);
     }
+  }
+  return 0;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {  // a program of data/gcode/thin missing or unreadable
+    std::fprintf(stderr, "bench_thin_cuts: %s\n", e.what());
+    return 1;
   }
 }
