@@ -43,18 +43,28 @@ struct KnownMiss {
 // 0.042 mm^3 there (each step's band pieces fall at other heights: the same cover, cut into other
 // pieces, is larger somewhere).
 constexpr KnownMiss kKnownMisses[] = {
-    {"voxel", "floor_recut flat", 9, 0.025},   {"voxel", "floor_recut flat", 29, 0.03},
-    {"voxel", "floor_recut flat", 31, 0.02},   {"voxel", "floor_recut flat", -1, 0.75},
-    {"voxel", "skims_ramps flat", 8, 0.06},    {"voxel", "skims_ramps flat", 12, 0.02},
-    {"voxel", "skims_ramps flat", 13, 0.01},   {"voxel", "skims_ramps flat", 17, 1e-4},
-    {"voxel", "skims_ramps flat", 16, 0.02},   {"voxel", "skims_ramps flat", 24, 0.03},
-    {"voxel", "skims_ramps flat", 28, 0.035},  {"voxel", "skims_ramps flat", 0, 0.004},
-    {"voxel", "skims_ramps flat", -1, 0.14},   {"voxel", "pecks_grazes flat", 8, 0.08},
-    {"voxel", "pecks_grazes flat", 11, 0.025}, {"voxel", "pecks_grazes flat", -1, 0.5},
-    {"voxel", "ball_steps ball", 22, 1e-5},    {"dexel", "ball_steps ball", 22, 0.05},
+    {"voxel", "floor_recut flat", 9, 0.025},
+    {"voxel", "floor_recut flat", 29, 0.03},
+    {"voxel", "floor_recut flat", 31, 0.02},
+    {"voxel", "floor_recut flat", -1, 0.75},
+    {"voxel", "skims_ramps flat", 8, 0.06},
+    {"voxel", "skims_ramps flat", 12, 0.02},
+    {"voxel", "skims_ramps flat", 13, 0.01},
+    {"voxel", "skims_ramps flat", 17, 1e-4},
+    {"voxel", "skims_ramps flat", 16, 0.02},
+    {"voxel", "skims_ramps flat", 24, 0.03},
+    {"voxel", "skims_ramps flat", 28, 0.035},
+    {"voxel", "skims_ramps flat", 0, 0.004},
+    {"voxel", "skims_ramps flat", -1, 0.14},
+    {"voxel", "pecks_grazes flat", 8, 0.08},
+    {"voxel", "pecks_grazes flat", 11, 0.025},
+    {"voxel", "pecks_grazes flat", -1, 0.5},
+    {"voxel", "ball_steps ball", 22, 1e-5},
+    {"dexel", "ball_steps ball", 22, 0.05},
     // Retracts after ramps: corners of columns the ramp's band left (its approximate share)
     // that the exact share of the cutter at its end reaches: 2.4e-8 and 1.1e-6 mm^3.
-    {"dexel", "skims_ramps flat", 13, 5e-8},   {"dexel", "skims_ramps flat", 17, 2e-6},
+    {"dexel", "skims_ramps flat", 13, 5e-8},
+    {"dexel", "skims_ramps flat", 17, 2e-6},
 };
 
 const KnownMiss* knownMiss(const std::string& model, const std::string& program, int line) {

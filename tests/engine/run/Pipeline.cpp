@@ -396,6 +396,5 @@ TEST_CASE("a job's memory estimate follows its stock's closed-form bounds", "[ru
   CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) == Approx(64e6 + 100 * 1000.0));
   // A cross-check holds both stocks.
   v["cross-check"] = "true";
-  CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) ==
-        Approx(64e6 + 100 * 1000.0 + voxels));
+  CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) == Approx(64e6 + 100 * 1000.0 + voxels));
 }
