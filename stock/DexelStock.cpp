@@ -347,8 +347,8 @@ bool steadySolid(const StepPath& path, const AptCutter& cutter, const Eigen::Vec
   const double top = std::max(path.start.z(), path.end.z()) + cutter.height();
   // Full cover where the radius exceeds rho + margin, none below rho - margin (margin: the
   // column's half width seen from the track, h/2 to h/sqrt 2); across the band between (a
-  // vertical wall: the whole height) eight pieces, each with the mean share of the boundary
-  // between its ends, less its curvature.
+  // vertical wall: the whole height) pieces, each with the mean share of the boundary between
+  // its ends, less its curvature.
   const double zFull =
       rho + margin <= cutter.maxRadius() ? z + lowestAt(cutter, rho + margin) : top;
   const double zNone = z + lowestAt(cutter, std::max(0.0, rho - margin));
