@@ -22,16 +22,18 @@ constexpr int kAngleBins = 256;
 using Interval = DexelStock::Interval;
 using Intervals = std::vector<Interval>;
 
+/// Shares within this of each other are the same: one cover computed twice by different sums
+/// (a retract over what its step's end cut) would otherwise take 1e-18 mm^3 from nothing.
+constexpr double kSameShare = 1e-12;
+
 /// Leave at most `keep` of the column's material in [a, b] (keep = 1 - the share the cutter
 /// covers); returns the material removed, mm (length x share).
 double cut(Intervals& iv, double a, double b, double keep) {
   if (!(b > a)) return 0.0;
-  // Most calls change nothing (air, or material already cut as far): no copy then. Shares
-  // within 1e-12 of `keep` are taken as equal: the same cover computed twice by different
-  // sums (a retract over what its step's end cut) would otherwise take 1e-18 mm^3 from nothing.
-  constexpr double kSame = 1e-12;
-  if (std::none_of(iv.begin(), iv.end(),
-                   [&](const Interval& x) { return x.z1 > a && x.z0 < b && x.f > keep + kSame; }))
+  // Most calls change nothing (air, or material already cut as far): no copy then.
+  if (std::none_of(iv.begin(), iv.end(), [&](const Interval& x) {
+        return x.z1 > a && x.z0 < b && x.f > keep + kSameShare;
+      }))
     return 0.0;
   double removed = 0.0;
   // Scratch buffers reused from call to call (a removal calls this for every band piece of
@@ -39,7 +41,7 @@ double cut(Intervals& iv, double a, double b, double keep) {
   static thread_local Intervals out, merged;
   out.clear();
   for (const Interval& x : iv) {
-    if (x.z1 <= a || x.z0 >= b || x.f <= keep + kSame) {
+    if (x.z1 <= a || x.z0 >= b || x.f <= keep + kSameShare) {
       out.push_back(x);
       continue;
     }
@@ -222,6 +224,12 @@ class ColumnShare {
   }
 };
 
+/// The direction halfway between unit directions a and b (b where they are opposite).
+Eigen::Vector2d meanDirection(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const Eigen::Vector2d n = a + b;
+  return n.norm() > 1e-12 ? Eigen::Vector2d(n.normalized()) : b;
+}
+
 /// Does the cutter's radius never shrink upwards (so that a vertical line at distance rho
 /// from its axis meets it in one interval from the profile's lowest height at rho up)? For
 /// the APT profile: unless its sides lean inward (beta < 0), the rule Sweep uses for convexity.
@@ -360,7 +368,9 @@ bool steadySolid(const StepPath& path, const AptCutter& cutter, const Eigen::Vec
   // ball's 1.3 mm arc fell in the first of 1 mm pieces down an 8 mm deep slot (CAMotics' heart
   // cut out -0.6 %).
   const ColumnShare share(away);
-  std::vector<double> cutsAt{zNone};
+  // (A scratch buffer: this runs for every ray of every step.)
+  static thread_local std::vector<double> cutsAt;
+  cutsAt.assign(1, zNone);
   for (const ProfileSegment& seg : cutter.profile())
     for (double y : {seg.start.y(), seg.end.y()})
       if (z + y > zNone && z + y < bandTop) cutsAt.push_back(z + y);
@@ -476,9 +486,7 @@ void rampBand(const StepPath& path, const AptCutter& cutter, const Eigen::Vector
       const double dHigh = slice(b, awayHigh);
       double cover = 0.0;
       if (std::isfinite(dLow) && std::isfinite(dHigh)) {
-        const Eigen::Vector2d n = awayLow + awayHigh;
-        cover = ColumnShare(n.norm() > 1e-12 ? Eigen::Vector2d(n.normalized()) : awayHigh)
-                    .averageCover(dLow, dHigh, h);
+        cover = ColumnShare(meanDirection(awayLow, awayHigh)).averageCover(dLow, dHigh, h);
       } else {
         Eigen::Vector2d away;
         const double d = slice(0.5 * (a + b), away);
@@ -506,10 +514,9 @@ void rampBand(const StepPath& path, const AptCutter& cutter, const Eigen::Vector
       for (int k = 0; k < kPieces; ++k) {
         const double s0 = static_cast<double>(k) / kPieces,
                      s1 = static_cast<double>(k + 1) / kPieces;
-        const Eigen::Vector2d n = s1 <= 0.5 ? away[0] + away[1] : away[1] + away[2];
-        const double cover =
-            ColumnShare(n.norm() > 1e-12 ? Eigen::Vector2d(n.normalized()) : away[1])
-                .averageCover(dAt(s0), dAt(s1), h);
+        const Eigen::Vector2d n =
+            s1 <= 0.5 ? meanDirection(away[0], away[1]) : meanDirection(away[2], away[1]);
+        const double cover = ColumnShare(n).averageCover(dAt(s0), dAt(s1), h);
         if (cover > 0.0)
           solid.push_back({zNone + (bandTop - zNone) * s0, zNone + (bandTop - zNone) * s1, cover});
       }
@@ -852,11 +859,11 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
       for (const Interval& sx : solid) {
         // What of the ray in [z0, z1] loses material; remember where, for the engagement.
         for (const Interval& x : ray)
-          if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f + 1e-12)
+          if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f + kSameShare)
             cuts.push_back({q, std::max(x.z0, sx.z0), std::min(x.z1, sx.z1)});
         double zLo = sx.z1, zHi = sx.z0;
         for (const Interval& x : ray)
-          if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f + 1e-12) {
+          if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f + kSameShare) {
             zLo = std::min(zLo, std::max(x.z0, sx.z0));
             zHi = std::max(zHi, std::min(x.z1, sx.z1));
           }
