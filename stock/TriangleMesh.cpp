@@ -149,21 +149,48 @@ std::size_t boundaryEdgeCount(const TriangleMesh& mesh) {
 }
 
 void writeStl(const TriangleMesh& m, const std::string& path) {
-  omlog().disable();  // OpenMesh's writers report to the terminal; a library stays silent
-  omout().disable();
-  Mesh mesh;
-  std::vector<Mesh::VertexHandle> vh;
-  vh.reserve(m.points.size());
-  for (const auto& p : m.points)
-    vh.push_back(mesh.add_vertex(Mesh::Point(p[0], p[1], p[2])));
-  for (const auto& t : m.triangles)
-    mesh.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
-  mesh.request_face_normals();
-  mesh.update_face_normals();
-  // Through a stream of ours, checked: OpenMesh's file writer does not report a full disk.
+  // Written here, not through OpenMesh: its writer takes a halfedge mesh, which refuses a
+  // face on an edge that two faces already have (a marching-cubes surface has such edges where
+  // two cuts meet in one cell: the face went missing from stock.stl without a word), and
+  // building that mesh took 0.4 of the 0.5 s of CAMotics' heart's 845,000 triangles.
+  const auto count = static_cast<std::uint32_t>(m.triangles.size());
+  if (count != m.triangles.size())
+    throw Error("cannot write '" + path + "': " + std::to_string(m.triangles.size()) +
+                " triangles, more than a binary STL holds");
   writeFileAtomically(path, [&](std::ostream& os) {
-    OpenMesh::IO::Options options(OpenMesh::IO::Options::Binary);
-    if (!OpenMesh::IO::write_mesh(mesh, os, ".stl", options)) os.setstate(std::ios::badbit);
+    std::string header = "binary STL of engage's stock, mm";
+    header.resize(80, ' ');
+    os.write(header.data(), 80);
+    os.write(reinterpret_cast<const char*>(&count), 4);
+    std::vector<char> buffer;
+    buffer.reserve(50 * 4096);
+    auto flush = [&] {
+      os.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+      buffer.clear();
+    };
+    for (const auto& t : m.triangles) {
+      const auto& p = m.points[t[0]];
+      const auto& q = m.points[t[1]];
+      const auto& r = m.points[t[2]];
+      const double u[3] = {double(q[0]) - p[0], double(q[1]) - p[1], double(q[2]) - p[2]};
+      const double v[3] = {double(r[0]) - p[0], double(r[1]) - p[1], double(r[2]) - p[2]};
+      double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                     u[0] * v[1] - u[1] * v[0]};
+      const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      float record[12];
+      for (std::size_t a = 0; a < 3; ++a) {
+        record[a] = length > 0.0 ? static_cast<float>(n[a] / length) : 0.0f;
+        record[3 + a] = p[a];
+        record[6 + a] = q[a];
+        record[9 + a] = r[a];
+      }
+      const char* bytes = reinterpret_cast<const char*>(record);
+      buffer.insert(buffer.end(), bytes, bytes + sizeof record);
+      buffer.push_back('\0');
+      buffer.push_back('\0');
+      if (buffer.size() >= 50 * 4096) flush();
+    }
+    flush();
   });
 }
 

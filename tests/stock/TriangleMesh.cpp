@@ -70,3 +70,35 @@ TEST_CASE("a sound binary STL reads, a broken one names its problem", "[stock]")
   CHECK(readMesh(write("good.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/2 -1\n")).triangles.size() ==
         1);
 }
+
+TEST_CASE("writeStl writes every triangle with its normal, where the mesh is not a manifold",
+          "[stock]") {
+  // Three triangles on one edge (x from 0 to 1): a marching-cubes mesh has such edges where two
+  // cuts meet in one cell, and a halfedge mesh refuses the third face. The file is a header,
+  // the count, and per triangle the unit normal, three corners and two zero bytes.
+  TriangleMesh m;
+  m.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}};
+  m.triangles = {{0, 1, 2}, {0, 3, 1}, {1, 0, 4}};
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "engage_mesh_fan.stl").string();
+  writeStl(m, path);
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  REQUIRE(bytes.size() == 84 + 3 * 50);
+  std::uint32_t count = 0;
+  std::memcpy(&count, bytes.data() + 80, 4);
+  CHECK(count == 3);
+  // The normals by hand: (1,0,0) x (0,1,0) = +z; (0,0,1) x (1,0,0) = +y; for 1,0,4: (-1,0,0) x
+  // (-1,-1,0) = (0,0,1).
+  const float normals[3][3] = {{0, 0, 1}, {0, 1, 0}, {0, 0, 1}};
+  for (std::size_t t = 0; t < 3; ++t) {
+    float rec[12];
+    std::memcpy(rec, bytes.data() + 84 + 50 * t, sizeof rec);
+    for (std::size_t a = 0; a < 3; ++a) {
+      CHECK(rec[a] == normals[t][a]);
+      for (std::size_t v = 0; v < 3; ++v)
+        CHECK(rec[3 + 3 * v + a] == m.points[m.triangles[t][v]][a]);
+    }
+  }
+  std::filesystem::remove(path);
+}
