@@ -28,6 +28,8 @@
 
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace engage {
 
@@ -99,6 +101,9 @@ class VoxelStock : public Stock {
   /// "planes_1" (each partial voxel's planes, which fromVdb reads back). Written to a
   /// temporary name and renamed when complete. Throws Error on I/O failure.
   void writeStockVdb(const std::string& path) const;
+  /// The signed distance (mm, negative inside) to the stock's surface, the 0.5 iso-surface of
+  /// the fractions, at each voxel centre within 3 voxels of it: stock.vdb's grid "surface".
+  std::vector<std::pair<Eigen::Vector3d, double>> surfaceBand() const;
   /// Write removed.vdb: grids "removed" (fraction removed), "step" (int32, first step) and
   /// "mrr" (mm^3/min of that step). Requires captureRemoved(true) before the removals.
   void writeRemovedVdb(const std::string& path) const;

@@ -24,6 +24,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <vector>
 
 using namespace engage;
@@ -396,6 +397,77 @@ TEST_CASE("a cut continued from a stock.vdb removes what the same cut in one run
   CHECK(fromFiner == Approx(finish).epsilon(0.01));
   CHECK(fromDexels == Approx(finish).epsilon(0.01));
   std::filesystem::remove(path);
+}
+
+TEST_CASE("stock.vdb's surface holds the signed distance to the stock's surface", "[stock][vdb]") {
+  // A block off the grid with a ball end mill's bowl (D = 12 plunged 6 mm: the lower half of a
+  // sphere of radius 6 about c, its rim on the top face), h = 0.3, as voxels and as dexels.
+  // The exact signed distance (negative in the material): in the material, the nearer of the
+  // top face and the sphere; inside the bowl, to the sphere; above the top face, to the face
+  // or, over the bowl, to its rim. Left out: the points within 3 h of the rim (an edge, which
+  // the fractions' 0.5 iso-surface rounds: up to 0.6 h there) and near the block's other
+  // faces.
+  const double h = 0.3, r = 6.0;
+  const Eigen::Vector3d c(20.13, 19.91, 0.0);
+  Box3 b;
+  b.min = {0.13, -0.07, -10.0};
+  b.max = {40.13, 39.93, 0.0};
+  const AptCutter ball = AptCutter::ball(2.0 * r, 20.0);
+  auto exact = [&](const Eigen::Vector3d& p) {
+    const double q = (p - c).norm(), rho = std::hypot(p.x() - c.x(), p.y() - c.y());
+    if (p.z() >= 0.0) return rho >= r ? p.z() : std::hypot(r - rho, p.z());
+    if (q < r) return r - q;
+    return -std::min(-p.z(), q - r);
+  };
+  auto checked = [&](const Eigen::Vector3d& p) {
+    const double rho = std::hypot(p.x() - c.x(), p.y() - c.y());
+    return std::hypot(rho - r, p.z()) >= 3.0 * h && p.z() > -8.0 &&
+           std::abs(p.x() - c.x()) < 15.0 && std::abs(p.y() - c.y()) < 15.0;
+  };
+  VoxelStock voxels = VoxelStock::box(b, h);
+  DexelStock dexels = DexelStock::box(b, h);
+  const Sweep plunge(ball, line(c + Eigen::Vector3d(0, 0, 5.0), c - Eigen::Vector3d(0, 0, r)), h);
+  voxels.remove(plunge);
+  dexels.remove(plunge);
+  std::vector<std::pair<const char*, VoxelStock>> stocks;
+  stocks.emplace_back("voxels", std::move(voxels));
+  stocks.emplace_back("dexels", VoxelStock::fromDexels(dexels));
+  for (const auto& [model, s] : stocks) {
+    double worst = 0.0, sum = 0.0;
+    std::size_t n = 0;
+    std::set<std::array<long, 3>> band;
+    for (const auto& [p, d] : s.surfaceBand()) {
+      band.insert({std::lround(p.x() / h), std::lround(p.y() / h), std::lround(p.z() / h)});
+      if (!checked(p)) continue;
+      const double e = std::abs(d - exact(p));
+      worst = std::max(worst, e);
+      sum += e;
+      ++n;
+    }
+    // Every voxel within 2.5 h of the surface is in the band (3 h, less the 0.2 h it can be
+    // off and a margin).
+    std::size_t missing = 0, near = 0;
+    for (int i = static_cast<int>(std::lround(5.5 / h));
+         i <= static_cast<int>(std::lround(34.5 / h)); ++i)
+      for (int j = static_cast<int>(std::lround(5.5 / h));
+           j <= static_cast<int>(std::lround(34.5 / h)); ++j)
+        for (int k = static_cast<int>(std::lround(-7.5 / h));
+             k <= static_cast<int>(std::lround(1.5 / h)); ++k) {
+          const Eigen::Vector3d p(i * h, j * h, k * h);
+          if (!checked(p) || !(std::abs(exact(p)) < 2.5 * h)) continue;
+          ++near;
+          if (!band.count({long(i), long(j), long(k)})) ++missing;
+        }
+    const double mean = sum / static_cast<double>(n);
+    INFO(model << ": " << n << " points, worst " << worst / h << " h, mean " << mean / h << " h; "
+               << missing << " of " << near << " within 2.5 h not in the band");
+    CHECK(near > 10000);
+    CHECK(missing == 0);
+    // Measured 0.198 h worst, 0.0093 h mean for both (OpenVDB's fast sweeping, before:
+    // 0.37 and 0.40 h, 0.013 and 0.014 h): a quarter more for other compilers' rounding.
+    CHECK(worst < 0.25 * h);
+    CHECK(mean < 0.012 * h);
+  }
 }
 
 TEST_CASE("a stock.vdb that is not an engage stock is refused with its reason", "[stock][vdb]") {
