@@ -28,10 +28,10 @@ std::string bothFormats(const std::string& name, const std::string& body,
   std::string script;
   for (const char* fmt : {"png", "svg"}) {
     const std::string file = name + "." + fmt;
-    script +=
-        std::string(fmt[0] == 'p' ? "set terminal pngcairo size 1400,700 font ',11'\n"
-                                  : "set terminal svg size 1400,700 dynamic font 'sans,11'\n") +
-        "set output " + quoted(file) + ".part\n" + body + "unset output\n";
+    script += "set terminal " + std::string(fmt[0] == 'p' ? "pngcairo" : "svg") + " size " +
+              std::to_string(kPlotWidth) + "," + std::to_string(kPlotWidth / 2) +
+              (fmt[0] == 'p' ? " font ',11'\n" : " dynamic font 'sans,11'\n") + "set output " +
+              quoted(file) + ".part\n" + body + "unset output\n";
     files.push_back(file);
   }
   return script;
@@ -131,6 +131,7 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
   // table (PlotSpec::data).
   std::string script =
       "if (!exists(\"data\")) data = 'steps.csv'\n"
+      "if (!exists(\"top\")) top = data\n"
       "if (!exists(\"part\")) part = ''\n"
       "set datafile separator ','\nset datafile columnheaders\nset grid\nset key outside top "
       "center horizontal\n";
@@ -205,11 +206,12 @@ std::vector<std::string> writePlots(const PlotSpec& p) {
   plot("topview", "set title 'Top view, coloured by measured MRR (" + p.rateLabel +
                       ")'\nset size ratio -1\nset xlabel 'x (" + p.lengthLabel +
                       ")'\nset ylabel 'y (" + p.lengthLabel + ")'\nset palette rgb 33,13,10\n" +
-                      "plot data using (strcol(\"kind\") eq \"rapid\" ? NaN : column(\"x_" + L +
+                      "plot top using (strcol(\"kind\") eq \"rapid\" ? NaN : column(\"x_" + L +
                       "\")):\"y_" + L + "\":\"mrr_" + Q +
                       "\" with points pt 7 ps 0.4 lc palette notitle\nset size noratio\n");
+  const bool shorter = p.data != "steps.csv" || p.topData != "steps.csv";
   runGnuplot(dir, "plots.gp", script, files,
-             p.data == "steps.csv" ? std::string() : "data='" + p.data + "'");
+             shorter ? "data='" + p.data + "'; top='" + p.topData + "'" : std::string());
   return files;
 }
 

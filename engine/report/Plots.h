@@ -6,11 +6,15 @@
 /// a top view of the path coloured by MRR, and with the cutting physics the chip thickness,
 /// peak force and spindle power along the path.
 
+#include <cstddef>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace engage {
+
+/// The pictures' width in pixels (their height is half of it).
+inline constexpr std::size_t kPlotWidth = 1400;
 
 /// What to plot, in the run's units.
 struct PlotSpec {
@@ -19,6 +23,8 @@ struct PlotSpec {
   /// report plots (every bucket's extremes: RunReport.h's reportSteps), so that gnuplot does
   /// not draw half a million points into a 1400-pixel-wide picture.
   std::string data = "steps.csv";
+  /// The table the top view reads (a long run's can be longer than `data`).
+  std::string topData = "steps.csv";
   std::string length;  ///< column tag of lengths, e.g. "mm"
   std::string feed;    ///< e.g. "mm_min"
   std::string rate;    ///< e.g. "mm3_min"

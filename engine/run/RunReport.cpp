@@ -213,10 +213,11 @@ json table(const RunResult& result, const std::vector<Column>& columns,
 
 }  // namespace
 
-std::vector<std::size_t> reportSteps(const RunResult& result, const std::string& summaryJsonText) {
+std::vector<std::size_t> reportSteps(const RunResult& result, const std::string& summaryJsonText,
+                                     std::size_t buckets, std::size_t allUpTo) {
   const std::size_t n = result.sim.steps.size();
   std::vector<std::size_t> keep;
-  if (n <= kAllSteps) {
+  if (n <= allUpTo) {
     keep.resize(n);
     for (std::size_t i = 0; i < n; ++i)
       keep[i] = i;
@@ -239,8 +240,8 @@ std::vector<std::size_t> reportSteps(const RunResult& result, const std::string&
                               {"mrr_scheduled", true}, {"feed_scheduled", false},
                               {"acceleration", true},  {"acceleration", false},
                               {"f_peak", true},        {"h_max", true}};
-  for (std::size_t b = 0; b < kBuckets; ++b) {
-    const std::size_t from = b * n / kBuckets, to = (b + 1) * n / kBuckets;
+  for (std::size_t b = 0; b < buckets; ++b) {
+    const std::size_t from = b * n / buckets, to = (b + 1) * n / buckets;
     for (const Extreme& e : extremes) {
       const Column* c = find(columns, e.column);
       if (!c || from >= to) continue;

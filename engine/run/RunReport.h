@@ -36,8 +36,10 @@ std::string runReportHtml(const RunResult& result, const std::string& summaryJso
                           const std::vector<std::size_t>& steps, const WrittenOutputs& written,
                           bool withSurface);
 
-/// The steps the plots keep (all up to kAllSteps, else the extremes of each bucket and the
-/// peaks that `summaryJson`, summary.json's text, names), in order.
-std::vector<std::size_t> reportSteps(const RunResult& result, const std::string& summaryJson);
+/// The steps the plots keep (all up to `allUpTo`, else the extremes of each of `buckets`
+/// equal runs of steps and the peaks that `summaryJson`, summary.json's text, names), in order.
+std::vector<std::size_t> reportSteps(const RunResult& result, const std::string& summaryJson,
+                                     std::size_t buckets = kBuckets,
+                                     std::size_t allUpTo = kAllSteps);
 
 }  // namespace engage
