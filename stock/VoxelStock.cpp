@@ -948,9 +948,12 @@ void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
   auto macc = mrr->getAccessor();
   const std::vector<double>& stepMrr = d.stepMrr();
   // The log grouped by column (a counting sort; within a column in step order), each column's
-  // removal summed per voxel height before it is spread over its four voxel columns: cameo's
-  // 1.95 million entries over 9.5 million voxel heights had taken 0.82 s spread one by one,
-  // now 0.56 s (its grids identical to 7e-7; tiger, heart the same).
+  // removal summed per voxel height, and each voxel column's four dexel columns merged before
+  // its voxels are written, once each. Spread one log entry at a time, cameo's 1.95 million
+  // entries over 9.5 million voxel heights had taken 0.82 s; summed per dexel column and each
+  // added into four voxels' grid values, 0.56 s; merged, the whole run 0.1 s shorter (cameo
+  // 6.58 -> 6.48 s, bear 4.39 -> 4.26 s, medians of three alternating runs, one core; the
+  // grids' counts and ranges the same).
   const std::vector<DexelStock::Lost>& log = d.removedLog();
   const auto rays = static_cast<std::size_t>(d.raysX()) * static_cast<std::size_t>(d.raysY());
   auto rayOf = [&](const DexelStock::Lost& l) {
@@ -970,43 +973,86 @@ void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
   }
   struct Height {
     double removed = 0.0;
-    int step = 0;  // the first step to reach it (the log is in step order)
-    bool reached = false;
+    int step = std::numeric_limits<int>::max();  // the first step to reach it
   };
-  std::vector<Height> heights;
-  for (std::size_t r = 0; r < rays; ++r) {
-    if (first[r] == first[r + 1]) continue;
-    const DexelStock::Lost& any = log[order[first[r]]];
+  /// One dexel column's removal per voxel height kLow + n.
+  struct Column {
+    int kLow = 0;
+    std::vector<Height> heights;
+  };
+  auto columnOf = [&](int i, int j, Column& out) {
+    out.heights.clear();
+    const std::size_t r = static_cast<std::size_t>(j) * static_cast<std::size_t>(d.raysX()) +
+                          static_cast<std::size_t>(i);
+    if (first[r] == first[r + 1]) return;
     int kLow = std::numeric_limits<int>::max(), kHigh = std::numeric_limits<int>::min();
     for (std::size_t e = first[r]; e < first[r + 1]; ++e)
       heightShares(h, log[order[e]].z0, log[order[e]].z1, [&](int k, double) {
         kLow = std::min(kLow, k);
         kHigh = std::max(kHigh, k);
       });
-    if (kLow > kHigh) continue;
-    heights.assign(static_cast<std::size_t>(kHigh - kLow + 1), Height{});
+    if (kLow > kHigh) return;
+    out.kLow = kLow;
+    out.heights.assign(static_cast<std::size_t>(kHigh - kLow + 1), Height{});
     for (std::size_t e = first[r]; e < first[r + 1]; ++e) {
       const DexelStock::Lost& l = log[order[e]];
       heightShares(h, l.z0, l.z1, [&](int k, double z) {
-        Height& at = heights[static_cast<std::size_t>(k - kLow)];
+        Height& at = out.heights[static_cast<std::size_t>(k - kLow)];
         at.removed += z * l.share;
-        if (!at.reached) at.step = l.step;
-        at.reached = true;
+        at.step = std::min(at.step, l.step);
       });
     }
-    const ColumnFootprint column(d, any.i, any.j);
-    for (int k = kLow; k <= kHigh; ++k) {
-      const Height& at = heights[static_cast<std::size_t>(k - kLow)];
-      if (!at.reached) continue;
-      column.at(k, at.removed, [&](const Coord& c, double removedShare) {
-        racc.setValue(c, static_cast<float>(std::min(1.0, racc.getValue(c) + removedShare)));
-        const int held = sacc.getValue(c);
-        if (!sacc.isValueOn(c) || at.step < held) {
-          sacc.setValue(c, at.step);
-          const auto s = static_cast<std::size_t>(std::max(at.step, 0));
-          macc.setValue(c, static_cast<float>(s < stepMrr.size() ? stepMrr[s] : 0.0));
+  };
+  // Voxel column (cx0 + a, cy0 + b) overlaps dexel columns (a - 1 .. a, b - 1 .. b), the
+  // shares of each the footprint's (the dexels and the voxels have one spacing).
+  const ColumnFootprint corner(d, 0, 0);
+  const int nx = d.raysX(), ny = d.raysY();
+  std::vector<Column> below(static_cast<std::size_t>(nx)), here(static_cast<std::size_t>(nx));
+  std::vector<Height> merged;
+  for (int b = 0; b <= ny; ++b) {
+    below.swap(here);
+    for (int i = 0; i < nx; ++i) {
+      here[static_cast<std::size_t>(i)].heights.clear();
+      if (b < ny) columnOf(i, b, here[static_cast<std::size_t>(i)]);
+    }
+    for (int a = 0; a <= nx; ++a) {
+      struct Part {
+        const Column* column;
+        double share;
+      } parts[4];
+      int count = 0;
+      int kLow = std::numeric_limits<int>::max(), kHigh = std::numeric_limits<int>::min();
+      for (int di = 0; di < 2; ++di)
+        for (int dj = 0; dj < 2; ++dj) {
+          const int i = a - di;
+          if (i < 0 || i >= nx || (dj == 0 && b >= ny) || (dj == 1 && b == 0)) continue;
+          const Column& c = (dj == 0 ? here : below)[static_cast<std::size_t>(i)];
+          const double share =
+              (di == 0 ? corner.wx : 1.0 - corner.wx) * (dj == 0 ? corner.wy : 1.0 - corner.wy);
+          if (c.heights.empty() || !(share > 0.0)) continue;
+          parts[count++] = {&c, share};
+          kLow = std::min(kLow, c.kLow);
+          kHigh = std::max(kHigh, c.kLow + static_cast<int>(c.heights.size()) - 1);
         }
-      });
+      if (count == 0) continue;
+      merged.assign(static_cast<std::size_t>(kHigh - kLow + 1), Height{});
+      for (int p = 0; p < count; ++p)
+        for (std::size_t n = 0; n < parts[p].column->heights.size(); ++n) {
+          const Height& from = parts[p].column->heights[n];
+          if (from.step == std::numeric_limits<int>::max()) continue;
+          Height& to = merged[static_cast<std::size_t>(parts[p].column->kLow - kLow) + n];
+          to.removed += from.removed * parts[p].share;
+          to.step = std::min(to.step, from.step);
+        }
+      for (int k = kLow; k <= kHigh; ++k) {
+        const Height& at = merged[static_cast<std::size_t>(k - kLow)];
+        if (at.step == std::numeric_limits<int>::max()) continue;
+        const Coord c(corner.cx + a, corner.cy + b, k);
+        racc.setValue(c, static_cast<float>(std::min(1.0, at.removed)));
+        sacc.setValue(c, at.step);
+        const auto s = static_cast<std::size_t>(std::max(at.step, 0));
+        macc.setValue(c, static_cast<float>(s < stepMrr.size() ? stepMrr[s] : 0.0));
+      }
     }
   }
   writeVdb(path, openvdb::GridPtrVec{removed, step, mrr});
