@@ -1,7 +1,7 @@
 #pragma once
 /// \file TriangleMesh.h
-/// Triangle meshes in and out (OpenMesh behind this header): reading stock models (STL,
-/// OBJ, OFF, PLY) and writing binary STL.
+/// Triangle meshes in and out: reading stock models (STL, OBJ, OFF, PLY; OpenMesh behind this
+/// header) and writing binary STL (directly: OpenMesh's writer drops faces, TriangleMesh.cpp).
 
 #include <array>
 #include <cstddef>
