@@ -26,7 +26,10 @@
 #include "cutters/Sweep.h"
 #include "stock/Stock.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -76,16 +79,40 @@ class DexelStock : public Stock {
 
   /// Record, for every removal, where each column lost material and which step removed it
   /// (for removed.vdb, written by VoxelStock::writeRemovedVdb).
-  void captureRemoved(bool on) { capture_ = on; }
-  /// A piece of a column that lost material: heights (mm), the share of the column lost there
-  /// (times the column's weight), and the step.
+  void captureRemoved(bool on) {
+    capture_ = on;
+    if (on && lostIndex_.empty()) lostIndex_.assign(rays_.size(), kNoColumn);
+  }
+  /// What a column lost at one voxel height (the heights [(k - 1/2) h, (k + 1/2) h], h the
+  /// spacing, as the voxels of VoxelStock::fromDexels) over the captured removals: the share
+  /// of the h x h x h cell (times the column's weight), and the first step that took some
+  /// (-1: none).
   struct Lost {
-    int i, j;
-    double z0, z1;
-    double share;
-    int step;
+    float share = 0.0f;
+    std::int32_t step = -1;
   };
-  const std::vector<Lost>& removedLog() const { return log_; }
+  /// A column's losses: cells[n] at voxel height top - n.
+  struct LostColumn {
+    int top = 0;
+    std::vector<Lost> cells;
+  };
+  /// The losses of column (i, j); nullptr where it lost nothing or nothing was captured.
+  const LostColumn* removedColumn(int i, int j) const {
+    if (lostIndex_.empty()) return nullptr;
+    const std::uint32_t n = lostIndex_[index(i, j)];
+    return n == kNoColumn ? nullptr : &lost_[n];
+  }
+  /// fn(k, z) for the voxel heights k that [z0, z1] overlaps, z the share of the height it
+  /// fills, for cells of size h.
+  template <typename Fn>
+  static void voxelHeights(double h, double z0, double z1, Fn&& fn) {
+    const int k0 = static_cast<int>(std::floor(z0 / h + 0.5));
+    const int k1 = static_cast<int>(std::floor(z1 / h + 0.5));
+    for (int k = k0; k <= k1; ++k) {
+      const double z = std::max(0.0, std::min(z1, (k + 0.5) * h) - std::max(z0, (k - 0.5) * h)) / h;
+      if (z > 0.0) fn(k, z);
+    }
+  }
   /// MRR of each captured step, mm^3/min (removed volume over its time).
   const std::vector<double>& stepMrr() const { return stepMrr_; }
 
@@ -106,7 +133,10 @@ class DexelStock : public Stock {
   std::vector<double> weight_;
   std::vector<std::vector<Interval>> rays_;
   bool capture_ = false;
-  std::vector<Lost> log_;
+  /// Per ray, its losses' place in lost_ (kNoColumn: none yet); 4 bytes a ray.
+  static constexpr std::uint32_t kNoColumn = 0xFFFFFFFFu;
+  std::vector<std::uint32_t> lostIndex_;
+  std::vector<LostColumn> lost_;
   std::vector<double> stepMrr_;
 };
 
