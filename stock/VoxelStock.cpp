@@ -1862,7 +1862,9 @@ class BandBlocks {
 /// fractions' gradient through the crossings on those edges (the fractions interpolated linearly
 /// along each; the crossings weighted by how square their edge is to the plane) gives the voxel's
 /// distance, and its foot and normal make a patch, a disc of radius 0.35 h. Then layer by
-/// layer, each voxel handed on in the last layer hands its patch to its 26 neighbours; each
+/// layer, each voxel handed on in the last layer hands its patch to those of its 26
+/// neighbours not behind it as seen from the patch (to all 26: CAMotics' heart as dexels
+/// 0.09 s longer, 1.98 against 1.89 s, the bowl below no better); each
 /// keeps the nearest patch it is handed and, when that is new or nearer and within the band,
 /// hands it on in the next layer (a voxel of an earlier layer can get a nearer patch from
 /// farther round: one 2 h under a top face beside a bowl's wall had its from the wall, 0.76
@@ -1871,20 +1873,18 @@ class BandBlocks {
 /// through its neighbours, keeps the propagation to array reads.
 ///
 /// Against the exact distance to a ball's bowl in a block (tests/stock/VoxelStock.cpp, 55,000
-/// band voxels at 0.3 mm, 3 h from its rim and more), worst 0.20 h and mean 0.0093 h from
-/// voxels and from dexels. The patch's radius was chosen on that bowl (worst error): points
-/// alone 0.42 h, radius 0.25 h 0.26 h, 0.5 h 0.24 h, 0.75 h 0.44 h (discs reaching over the
-/// rim).
-/// Handing to the 6 face neighbours only: 0.47 h worst, the layers 0.25 s against 0.40 s;
-/// 18 (faces and edges): 0.27 h, 0.33 s.
-/// Before it, OpenVDB's fast sweeping (sdfToSdf) of a first guess (1/2 - fraction) h over the
-/// mesh's voxels dilated by 3: worst 0.37 h (voxels) and 0.40 h (dexels), mean 0.013 and
-/// 0.014 h on the same bowl, and 1.53 s against 0.66 s now of a dexel run of CAMotics' heart
-/// at 0.253 mm (2.1 million band voxels, one core). Each voxel's own patch in its block
-/// instead of an index into the patches: as fast, 50 MB more at the run's peak. Earlier still:
-/// meshing and re-voxelising (levelSetRebuild) 5 of the 9 s of a 17k-move run; meshToLevelSet
-/// on the same mesh 4.4 s; each band voxel's nearest triangle propagated from the voxels at
-/// the triangles' corners 2.8 s, less exact near the surface (too few seeds: voxels a
+/// band voxels at 0.3 mm, 3 h from its rim and more), worst 0.18 h and mean 0.0088 h from
+/// voxels, 0.20 h and 0.0095 h from dexels. The patch's radius was chosen on that bowl (worst
+/// error): points alone 0.42 h, radius 0.25 h 0.26 h, 0.5 h 0.24 h, 0.75 h 0.44 h (discs reaching
+/// over the rim). Handing to the 6 face neighbours only: 0.47 h worst, the layers 0.25 s against
+/// 0.40 s; 18 (faces and edges): 0.27 h, 0.33 s. Before it, OpenVDB's fast sweeping (sdfToSdf) of a
+/// first guess (1/2 - fraction) h over the mesh's voxels dilated by 3: worst 0.37 h (voxels) and
+/// 0.40 h (dexels), mean 0.013 and 0.014 h on the same bowl, and 1.53 s against 0.66 s now of a
+/// dexel run of CAMotics' heart at 0.253 mm (2.1 million band voxels, one core). Each voxel's own
+/// patch in its block instead of an index into the patches: as fast, 50 MB more at the run's peak.
+/// Earlier still: meshing and re-voxelising (levelSetRebuild) 5 of the 9 s of a 17k-move run;
+/// meshToLevelSet on the same mesh 4.4 s; each band voxel's nearest triangle propagated from the
+/// voxels at the triangles' corners 2.8 s, less exact near the surface (too few seeds: voxels a
 /// twentieth of a cell from it read half a cell).
 FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
                                const std::vector<std::array<float, 3>>& points) {
@@ -2008,6 +2008,7 @@ FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
       const bool inner = local.x() > 0 && local.x() < 7 && local.y() > 0 && local.y() < 7 &&
                          local.z() > 0 && local.z() < 7;
       for (const Neighbour& e : around) {
+        if (fromPoint.dot(e.step) < 0.0f) continue;  // behind, seen from the patch
         std::int32_t ui = bi;
         std::uint32_t uo = o + static_cast<std::uint32_t>(e.offset);
         if (!inner) {
