@@ -2152,14 +2152,23 @@ Toolpath readPrograms(const std::vector<std::string>& paths, const ReaderOptions
       throw GcodeError(path, 1, 1,
                        "expected at most " + std::to_string(options.maxMoves) +
                            " moves in the programs together, found more");
-    for (Move& m : one.moves) {
-      m.file += files;
-      m.block += blocks;
-      all.moves.push_back(std::move(m));
-    }
-    for (SourceBlock& b : one.blocks) {
-      b.file += files;
-      all.blocks.push_back(std::move(b));
+    // The first program is taken whole (CAMotics' tiger: 67,000 moves, whose copy grown one
+    // at a time was a third of the run's heap at its peak), the others appended.
+    if (all.moves.empty() && all.blocks.empty()) {
+      all.moves = std::move(one.moves);
+      all.blocks = std::move(one.blocks);
+    } else {
+      all.moves.reserve(all.moves.size() + one.moves.size());
+      for (Move& m : one.moves) {
+        m.file += files;
+        m.block += blocks;
+        all.moves.push_back(std::move(m));
+      }
+      all.blocks.reserve(all.blocks.size() + one.blocks.size());
+      for (SourceBlock& b : one.blocks) {
+        b.file += files;
+        all.blocks.push_back(std::move(b));
+      }
     }
     all.files.insert(all.files.end(), one.files.begin(), one.files.end());
     all.inch = one.inch;

@@ -363,20 +363,28 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
                        &out.concavePaper, &out.convexPaper})
     finish(*a);
 
-  // Where measurement and the exact model differ most, over all cutting steps.
+  // Where measurement and the exact model differ most, over all cutting steps: the ten
+  // largest, kept as they come (all of them held at once took 7.8 MB on CAMotics' tiger).
+  auto larger = [](const Difference& x, const Difference& y) {
+    return std::abs(x.relative) != std::abs(y.relative)
+               ? std::abs(x.relative) > std::abs(y.relative)
+               : x.step < y.step;
+  };
+  constexpr std::size_t kLargest = 10;
   for (std::size_t i = 0; i < out.steps.size(); ++i) {
     const StepRecord& r = out.steps[i];
     if (r.kind == MoveKind::Rapid || r.mrr <= 0.0 ||
         !(std::isfinite(r.mrrExact) && r.mrrExact > 0.0))
       continue;
-    out.largest.push_back({i, r.line, r.mrr, r.mrrExact, r.mrr / r.mrrExact - 1.0});
+    const Difference d{i, r.line, r.mrr, r.mrrExact, r.mrr / r.mrrExact - 1.0};
+    if (out.largest.size() < kLargest) {
+      out.largest.push_back(d);
+      std::sort(out.largest.begin(), out.largest.end(), larger);
+    } else if (larger(d, out.largest.back())) {
+      out.largest.back() = d;
+      std::sort(out.largest.begin(), out.largest.end(), larger);
+    }
   }
-  std::sort(out.largest.begin(), out.largest.end(), [](const Difference& x, const Difference& y) {
-    return std::abs(x.relative) != std::abs(y.relative)
-               ? std::abs(x.relative) > std::abs(y.relative)
-               : x.step < y.step;
-  });
-  if (out.largest.size() > 10) out.largest.resize(10);
   return out;
 }
 
