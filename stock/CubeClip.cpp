@@ -1,9 +1,12 @@
 #include "stock/CubeClip.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <limits>
 
 namespace engage {
 namespace {
@@ -152,6 +155,115 @@ double onePlane(const HalfSpace& p) {
   return upper ? 1.0 - v : v;
 }
 
+/// The unit cube clipped by three planes or more, as a convex polyhedron: each face a polygon
+/// (counter-clockwise seen from outside) clipped by each plane in turn, the cap on the plane
+/// from the new edges, and the volume (and with `moment` its first moment) from the
+/// tetrahedra between the cube's centre and the faces' triangles. The six tetrahedra clipped
+/// plane by plane split into up to three each per plane: with six to eight planes (a flat
+/// end mill's rim on a 3D path, where up to eight corner planes bound the cut) that took 43 %
+/// of the voxel loop of CAMotics' flower_mold.
+class Polyhedron {
+ public:
+  Polyhedron() {
+    // The cube's faces, counter-clockwise seen from outside.
+    static const int corners[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                      {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+    auto corner = [](int c) {
+      return Eigen::Vector3d((c & 1) ? 0.5 : -0.5, (c & 2) ? 0.5 : -0.5, (c & 4) ? 0.5 : -0.5);
+    };
+    faces_ = 6;
+    for (int f = 0; f < 6; ++f) {
+      size_[f] = 4;
+      for (int k = 0; k < 4; ++k)
+        v_[f][k] = corner(corners[f][k]);
+    }
+  }
+
+  /// Keep {u : n . u <= a}. Points within 1e-12 of the plane count as kept, so that a plane
+  /// that only touches the polyhedron (the same plane again, a face of the cube) changes
+  /// nothing.
+  void clip(const HalfSpace& p) {
+    constexpr double kOn = 1e-12;
+    bool cuts = false;
+    for (int f = 0; f < faces_ && !cuts; ++f)
+      for (int k = 0; k < size_[f] && !cuts; ++k)
+        cuts = p.n.dot(v_[f][k]) - p.a > kOn;
+    if (!cuts) return;
+    Eigen::Vector3d cap[kMaxVertices * 2];
+    int capSize = 0;
+    int kept = 0;
+    for (int f = 0; f < faces_; ++f) {
+      Eigen::Vector3d out[kMaxVertices];
+      int n = 0;
+      const int m = size_[f];
+      for (int k = 0; k < m; ++k) {
+        const Eigen::Vector3d& P = v_[f][k];
+        const Eigen::Vector3d& Q = v_[f][(k + 1) % m];
+        const double sp = p.n.dot(P) - p.a, sq = p.n.dot(Q) - p.a;
+        const bool pIn = sp <= kOn, qIn = sq <= kOn;
+        if (pIn && n < kMaxVertices) out[n++] = P;
+        if (pIn != qIn) {
+          const Eigen::Vector3d x = P + (Q - P) * (sp / (sp - sq));
+          if (n < kMaxVertices) out[n++] = x;
+          if (capSize < kMaxVertices * 2) cap[capSize++] = x;
+        }
+      }
+      if (n < 3) continue;
+      size_[kept] = n;
+      for (int k = 0; k < n; ++k)
+        v_[kept][k] = out[k];
+      ++kept;
+    }
+    faces_ = kept;
+    if (kept == 0 || capSize < 3 || faces_ >= kMaxFaces) return;
+    // The cap: its points (where the faces' edges cross the plane, a corner on it from each of
+    // its edges) in order of angle about their mean, counter-clockwise about n (outward). A
+    // pseudo-angle (monotonic in the angle) instead of atan2, which took 6 % of the loop.
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (int k = 0; k < capSize; ++k)
+      mean += cap[k];
+    mean /= capSize;
+    const Eigen::Vector3d e1 = p.n.unitOrthogonal(), e2 = p.n.normalized().cross(e1);
+    double angle[kMaxVertices * 2];
+    int order[kMaxVertices * 2];
+    for (int k = 0; k < capSize; ++k) {
+      const Eigen::Vector3d d = cap[k] - mean;
+      const double x = d.dot(e1), y = d.dot(e2), r = std::abs(x) + std::abs(y);
+      const double t = r > 0.0 ? y / r : 0.0;  // in [-1, 1], rising with the angle in a half
+      angle[k] = x >= 0.0 ? t : (y >= 0.0 ? 2.0 - t : -2.0 - t);
+      order[k] = k;
+    }
+    std::sort(order, order + capSize, [&](int a, int b) { return angle[a] < angle[b]; });
+    int n = 0;
+    for (int k = 0; k < capSize && n < kMaxVertices; ++k) {
+      const Eigen::Vector3d& x = cap[order[k]];
+      if (n > 0 && (x - v_[faces_][n - 1]).squaredNorm() < 1e-24) continue;  // (a corner twice)
+      v_[faces_][n++] = x;
+    }
+    if (n > 1 && (v_[faces_][n - 1] - v_[faces_][0]).squaredNorm() < 1e-24) --n;
+    if (n >= 3) size_[faces_++] = n;
+  }
+
+  /// Volume, and with `moment` the first moment added to it.
+  double volume(Eigen::Vector3d* moment) const {
+    double sum = 0.0;
+    for (int f = 0; f < faces_; ++f)
+      for (int k = 1; k + 1 < size_[f]; ++k) {
+        const Eigen::Vector3d &a = v_[f][0], &b = v_[f][k], &c = v_[f][k + 1];
+        const double v = a.dot(b.cross(c)) / 6.0;
+        sum += v;
+        if (moment) *moment += v * (a + b + c) / 4.0;
+      }
+    return sum;
+  }
+
+ private:
+  static constexpr int kMaxFaces = 6 + 8, kMaxVertices = 4 + 8 + 2;
+  int faces_ = 0;
+  int size_[kMaxFaces] = {};
+  Eigen::Vector3d v_[kMaxFaces][kMaxVertices];
+};
+
 }  // namespace
 
 double cubeFraction(const HalfSpace* planes, int count, Eigen::Vector3d* centroid) {
@@ -173,6 +285,18 @@ double cubeFraction(const HalfSpace* planes, int count, Eigen::Vector3d* centroi
   if (centroid) centroid->setZero();
   if (n == 0) return 1.0;
   if (n == 1 && !centroid) return onePlane(active[0]);
+  // Three planes or more: the cube clipped as a polyhedron (from two, the tetrahedra and the
+  // last plane's closed form are faster: CAMotics' flower_mold's voxel loop 9.16 s against
+  // 9.55 s with the polyhedron from two).
+  if (n >= 3) {
+    Polyhedron cut;
+    for (int k = 0; k < n; ++k)
+      cut.clip(active[static_cast<std::size_t>(k)]);
+    const double sum = std::max(0.0, cut.volume(centroid));
+    if (centroid && sum > 0.0) *centroid /= sum;
+    if (centroid && !(sum > 0.0)) centroid->setZero();
+    return sum;
+  }
   static const std::array<Tet, 6> tets = kuhnTetrahedra();
   double sum = 0.0;
   for (const Tet& t : tets)

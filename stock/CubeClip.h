@@ -2,8 +2,9 @@
 /// \file CubeClip.h
 /// Volume of a voxel cut by planes: the voxel is the unit cube [-1/2, 1/2]^3 (coordinates in
 /// voxel sizes about its centre) and each half-space keeps {u : n . u <= a}. Exact for planes
-/// (the cube is split into six tetrahedra along its diagonal, each clipped plane by plane), so
-/// one voxel can hold the material between two surfaces (a wall and the cut that crosses it)
+/// (one plane in closed form; two by the six tetrahedra of the cube about its diagonal, the
+/// last plane in closed form; three or more by clipping the cube as a polyhedron), so one
+/// voxel can hold the material between two surfaces (a wall and the cut that crosses it)
 /// instead of only a fraction.
 
 #include <Eigen/Core>

@@ -108,6 +108,44 @@ TEST_CASE("one plane: the closed form agrees with clipping", "[stock]") {
   }
 }
 
+TEST_CASE("three planes and more: boxes, the same plane twice, and splits that add up", "[stock]") {
+  // x <= a, y <= b, z <= c: a box (a + 1/2)(b + 1/2)(c + 1/2) centred at ((a - 1/2) / 2, ...).
+  // Rounding only: 1e-12.
+  const double a = 0.1, b = -0.2, c = 0.35;
+  const HalfSpace box[] = {plane(1, 0, 0, a), plane(0, 1, 0, b), plane(0, 0, 1, c)};
+  Eigen::Vector3d centroid;
+  CHECK(cubeFraction(box, 3, &centroid) == Approx((a + 0.5) * (b + 0.5) * (c + 0.5)).margin(1e-12));
+  CHECK((centroid - Eigen::Vector3d((a - 0.5) / 2, (b - 0.5) / 2, (c - 0.5) / 2)).norm() < 1e-12);
+  // The same plane three times, and planes through the cube's corners and edges: as once.
+  const HalfSpace diagonal = plane(1, 1, 1, (-1.5 + 0.8) / std::sqrt(3.0));
+  const HalfSpace thrice[] = {diagonal, diagonal, diagonal};
+  CHECK(cubeFraction(thrice, 3) == Approx(0.8 * 0.8 * 0.8 / 6.0).margin(1e-12));
+  const HalfSpace throughEdges[] = {plane(1, 1, 0, 0.0), plane(1, -1, 0, 0.0), plane(0, 0, 1, 0.5)};
+  CHECK(cubeFraction(throughEdges, 3) == Approx(0.25).margin(1e-12));  // x <= -|y|
+  // A slab of no width keeps nothing.
+  const HalfSpace flat[] = {plane(2, 1, 0, 0.1), plane(2, 1, 0, 0.1).complement(),
+                            plane(0, 0, 1, 0.2)};
+  CHECK(cubeFraction(flat, 3) == Approx(0.0).margin(1e-12));
+  // Random sets of 3 to 8 planes: split by one more plane and its complement, the parts add up
+  // to the whole, with centroids that add up as moments (each part clipped on its own).
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (int trial = 0; trial < 300; ++trial) {
+    const int n = 3 + trial % 6;
+    HalfSpace with[9], without[9];
+    for (int k = 0; k < n - 1; ++k)
+      with[k] = without[k] = plane(U(rng), U(rng), U(rng), 0.45 * U(rng));
+    const HalfSpace split = plane(U(rng), U(rng), U(rng), 0.3 * U(rng));
+    with[n - 1] = split;
+    without[n - 1] = split.complement();
+    Eigen::Vector3d c0, c1, c2;
+    const double whole = cubeFraction(with, n - 1, &c0);
+    const double in = cubeFraction(with, n, &c1), out = cubeFraction(without, n, &c2);
+    CHECK(in + out == Approx(whole).margin(1e-12));
+    CHECK((in * c1 + out * c2 - whole * c0).norm() < 1e-12);
+  }
+}
+
 TEST_CASE("centroids of the clipped part", "[stock]") {
   // Half the cube, x <= 0: centroid at x = -1/4. The corner tetrahedron x + y + z <= -3/2 + t:
   // centroid a quarter of the way from the corner to the plane, -1/2 + t/4 on each axis.
