@@ -923,14 +923,14 @@ struct ColumnFootprint {
     first(d.originX() + i * h, cx, wx);
     first(d.originY() + j * h, cy, wy);
   }
+  /// The share of the column in voxel column (cx + a, cy + b), a and b 0 or 1.
+  double share(int a, int b) const { return (a ? 1.0 - wx : wx) * (b ? 1.0 - wy : wy); }
   /// fn(voxel, share of the voxel) for the four voxels at height index k filled to `z`.
   template <typename Fn>
   void at(int k, double z, Fn&& fn) const {
     for (int a = 0; a < 2; ++a)
-      for (int b = 0; b < 2; ++b) {
-        const double share = (a ? 1.0 - wx : wx) * (b ? 1.0 - wy : wy);
-        if (share > 0.0) fn(Coord(cx + a, cy + b, k), z * share);
-      }
+      for (int b = 0; b < 2; ++b)
+        if (share(a, b) > 0.0) fn(Coord(cx + a, cy + b, k), z * share(a, b));
   }
 };
 
@@ -1007,8 +1007,7 @@ void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
           const int i = a - di, j = b - dj;
           if (i < 0 || i >= nx || j < 0 || j >= ny) continue;
           const DexelStock::LostColumn* c = d.removedColumn(i, j);
-          const double share =
-              (di == 0 ? corner.wx : 1.0 - corner.wx) * (dj == 0 ? corner.wy : 1.0 - corner.wy);
+          const double share = corner.share(di, dj);
           if (!c || c->cells.empty() || !(share > 0.0)) continue;
           parts[count++] = {c, share};
           kHigh = std::max(kHigh, c->top);
@@ -2026,9 +2025,7 @@ FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
         if (reached && !(d < u.d[uo])) continue;
         u.d[uo] = d;
         u.patch[uo] = from;
-        // New, or nearer than it was: on to its neighbours in the next layer. A voxel of an
-        // earlier layer can get a nearer point from farther round (one 2 h under a top face
-        // and beside a bowl's wall had its point from the wall, 0.76 mm for 0.6).
+        // New, or nearer than it was (also in an earlier layer): on in the next layer.
         if (d < width && state != layer) {
           state = layer;
           next.emplace_back(ui, uo);
@@ -2167,12 +2164,9 @@ FloatGrid::Ptr boxFiltered(const FloatGrid& grid, double h, int factor) {
 }  // namespace
 
 std::size_t VoxelStock::writeStl(const std::string& path, std::size_t maxTriangles) const {
-  if (maxTriangles > 0) {
-    const TriangleMesh mesh = viewMesh(maxTriangles);
-    engage::writeStl(mesh, path);
-    return boundaryEdgeCount(mesh);
-  }
-  const TriangleMesh& mesh = impl_->surfaceMesh();
+  TriangleMesh coarse;
+  if (maxTriangles > 0) coarse = viewMesh(maxTriangles);
+  const TriangleMesh& mesh = maxTriangles > 0 ? coarse : impl_->surfaceMesh();
   engage::writeStl(mesh, path);
   return boundaryEdgeCount(mesh);
 }
