@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Cross-check the voxel and dexel stocks on every job of a batch manifest.
 
-Runs `engage batch` on a copy of the manifest with "cross-check": true for every job (and, with
---dexel, the dexel stock as the primary model), then prints a Markdown table per job: steps,
+Runs `engage batch` on a copy of the manifest with "cross-check": true and the voxel stock as
+the primary model for every job (the dexel stock is the other), then prints a Markdown table per job: steps,
 steps differing beyond the tolerance, worst step, the total removed by each model, and the run
 time and memory of each. Usage, from the repository root after building:
 
@@ -25,6 +25,7 @@ with open(args.manifest) as f:
     manifest = json.load(f)
 manifest.setdefault("defaults", {})["cross-check"] = True
 manifest["defaults"]["cross-check-tolerance"] = args.tolerance
+manifest["defaults"]["stock-model"] = "voxel"
 # Paths in the manifest are relative to it: keep them so by writing the copy beside it.
 base = os.path.dirname(os.path.abspath(args.manifest))
 copy = os.path.join(base, ".cross_check_manifest.json")

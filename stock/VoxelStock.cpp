@@ -1546,10 +1546,24 @@ DexelStock VoxelStock::dexelsFromVdb(const std::string& path, double h) {
         if (!(m > 0.0)) continue;
         double z0 = (k - 0.5) * h, z1 = (k + 0.5) * h, f = 1.0;
         if (m < 1.0) {
-          // A floor or a top (fractions changing mostly along z) is a shorter piece of the
-          // column, on the side of the material; a wall keeps the piece at its share.
+          // The column's top voxel (none above it, material below) holds a top face: a piece
+          // of the column as wide as the voxel below holds it (all of it under a floor, a
+          // wall's share at a wall's top edge or corner), as high as that leaves the material;
+          // a bottom voxel the same upside down. So no material rises above a top face: a
+          // corner's voxel taken as a wall's share of the voxel's full height put material
+          // above the face, which a rapid then met. Else a floor or a top (fractions changing
+          // mostly along z) is a shorter piece of the column, on the side of the material,
+          // and a wall keeps the piece at its share.
+          const double below = static_cast<double>(acc.getValue(c.offsetBy(0, 0, -1)));
+          const double above = static_cast<double>(acc.getValue(c.offsetBy(0, 0, 1)));
           const Eigen::Vector3d n = fractionNormal(acc, c);
-          if (std::abs(n.z()) >= n.head<2>().norm() && n.z() != 0.0) {
+          if ((below > 0.0) != (above > 0.0)) {
+            f = std::clamp(std::max(below, above), m, 1.0);
+            if (below > 0.0)
+              z1 = z0 + m / f * h;
+            else
+              z0 = z1 - m / f * h;
+          } else if (std::abs(n.z()) >= n.head<2>().norm() && n.z() != 0.0) {
             if (n.z() > 0.0)
               z1 = z0 + m * h;
             else

@@ -58,7 +58,7 @@ struct Job {
   int startTool = 0;
   CutterSet cutters;  ///< the cutter of every move's tool
   StockSpec stock;
-  StockModel stockModel = StockModel::Voxel;
+  StockModel stockModel = StockModel::Dexel;
   UnitSystem units = UnitSystem::Metric;  ///< of the reports (and of bare numbers)
   double voxel = 0.0;                     ///< voxel size or dexel ray spacing, mm
   SimulationOptions simulation;           ///< step length, stepover, depth (no progress)

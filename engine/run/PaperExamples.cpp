@@ -253,6 +253,10 @@ Run simulatePocket(const Pocket& pocket, const ToolOptions& tool, const std::str
                                {"flute-length", tool.fluteLength},
                                {"flutes", std::to_string(tool.flutes)},
                                {"stock", stock},
+                               // The paper's figures compare single steps with the exact
+                               // model: voxels hold a side cut's steps within 0.04 %, dexels
+                               // 0.54 % (README, How accurate).
+                               {"stock-model", "voxel"},
                                {"voxel", o.voxel},
                                {"stepover", "0.5in"},
                                {"depth", depth},

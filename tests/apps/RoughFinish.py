@@ -94,16 +94,18 @@ for model in ("voxel", "dexel"):
           "%s: finish starts from %.4f mm^3, rough left %.4f mm^3" % (model, before,
                                                                      stock_after(o("rough"))))
 
-# Another voxel size: resampled by overlap, the volume kept.
-run(["simulate", os.path.join(RF, "finish.ngc")] + TOOL +
-    ["--stock", os.path.join(OUT, "voxel_rough", "stock.vdb"), "--voxel", "0.17mm", "--out",
-     os.path.join(OUT, "finish_017")])
-before = summary(os.path.join(OUT, "finish_017"))["volume_before"]
-check(abs(before - stock_after(os.path.join(OUT, "voxel_rough"))) <= 1e-5 * before,
-      "0.17 mm voxels from 0.3 mm: %.4f vs %.4f mm^3" % (before,
-                                                         stock_after(os.path.join(OUT, "voxel_rough"))))
-check(abs(removed(os.path.join(OUT, "finish_017")) - FINISH) <= 1e-2 * FINISH,
-      "finish at 0.17 mm from 0.3 mm: %.3f vs %.3f mm^3" % (removed(os.path.join(OUT, "finish_017")), FINISH))
+# Another voxel size: resampled by overlap, the volume kept; in either model.
+for model in ("voxel", "dexel"):
+    f017 = os.path.join(OUT, model + "_finish_017")
+    run(["simulate", os.path.join(RF, "finish.ngc")] + TOOL +
+        ["--stock-model", model, "--stock", os.path.join(OUT, "voxel_rough", "stock.vdb"),
+         "--voxel", "0.17mm", "--out", f017])
+    before = summary(f017)["volume_before"]
+    left = stock_after(os.path.join(OUT, "voxel_rough"))
+    check(abs(before - left) <= 1e-5 * before,
+          "%s at 0.17 mm from 0.3 mm voxels: %.4f vs %.4f mm^3" % (model, before, left))
+    check(abs(removed(f017) - FINISH) <= 1e-2 * FINISH,
+          "%s: finish at 0.17 mm from 0.3 mm: %.3f vs %.3f mm^3" % (model, removed(f017), FINISH))
 
 # The batch example: finish after rough, from its stock.
 b = os.path.join(OUT, "batch")
@@ -113,11 +115,11 @@ with open(os.path.join(b, "batch.json")) as f:
     for r in json.load(f)["records"]:
         recs[r["name"]] = r
 check(all(r["status"] == "ok" for r in recs.values()), "batch: all jobs ok")
-check(abs(recs["rough"]["removed_mm3"] - removed(os.path.join(OUT, "voxel_rough"))) <= 1e-9,
-      "batch rough = simulate rough")
-check(abs(recs["finish"]["removed_mm3"] - removed(os.path.join(OUT, "voxel_finish"))) <= 1e-9,
+check(abs(recs["rough"]["removed_mm3"] - removed(os.path.join(OUT, "dexel_rough"))) <= 1e-9,
+      "batch rough = simulate rough (dexels, the default)")
+check(abs(recs["finish"]["removed_mm3"] - removed(os.path.join(OUT, "dexel_finish"))) <= 1e-9,
       "batch finish (schedule) from job:rough = simulate finish from rough's stock.vdb")
-check(abs(recs["finish_dexel"]["removed_mm3"] - FINISH) <= 1e-2 * FINISH, "batch finish_dexel")
+check(abs(recs["finish_voxel"]["removed_mm3"] - FINISH) <= 1e-2 * FINISH, "batch finish_voxel")
 again = run(["batch", os.path.join(RF, "batch.json"), "--out", b])
 check("3 already done" in again.stderr + again.stdout, "batch again: all done")
 

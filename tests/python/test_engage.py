@@ -115,7 +115,7 @@ def test_schedule_and_cross_check(slot):
     r = engage.run("schedule", program=slot, tool="flat", diameter=6, stock=BOX,
                    target_mrr="3600mm3/min", cross_check=True)
     steps = r.steps
-    assert "feed_scheduled_mm_min" in steps and "removed_dexel_mm3" in steps
+    assert "feed_scheduled_mm_min" in steps and "removed_voxel_mm3" in steps
     # Half the steady MRR: the steady feed halves, 600 -> 300 mm/min (a level within the
     # 5 % min-change below it).
     mid = (steps["x_mm"] > 10) & (steps["x_mm"] < 20) & (steps["feed_mm_min"] == 600.0)

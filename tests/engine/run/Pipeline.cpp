@@ -41,9 +41,9 @@ TEST_CASE("the pipeline measures a slot as its closed form", "[run]") {
   const std::string program = dir.write("slot.ngc", test::slotProgram());
   const RunResult r = runJob(makeJob(JobCommand::Simulate, slotJob(program)));
   REQUIRE(r.stock);
-  // The slot: the stadium 30 x 6 mm plus a 3 mm disc, 2 mm deep. The voxel stock is within
-  // 0.5 % per step of closed forms at the default voxel (README, accuracy); the total of a
-  // flat slot far tighter: 0.2 % allows for the rim of 0.3 mm voxels.
+  // The slot: the stadium 30 x 6 mm plus a 3 mm disc, 2 mm deep. The default (dexel) stock is
+  // within 0.5 % per step of closed forms at the default spacing (README, accuracy); the total
+  // of a flat slot far tighter: 0.2 % allows for the rim of 0.3 mm columns.
   const double slot = (30.0 * 6.0 + kPi * 9.0) * 2.0;
   CHECK(r.sim.removed == Approx(slot).epsilon(0.002));
   // The steady MRR D d F = 7200 mm^3/min at the step of the peak (the plunge is slower).
@@ -58,7 +58,7 @@ TEST_CASE("the pipeline measures a slot as its closed form", "[run]") {
   const auto summary = nlohmann::json::parse(summaryJson(r));
   CHECK(summary["removed"].get<double>() == Approx(r.sim.removed).epsilon(1e-12));
   CHECK(summary["peak_mrr"]["line"].get<int>() == r.sim.steps[r.peakStep].line);
-  CHECK(summary["stock_model"] == "voxel");
+  CHECK(summary["stock_model"] == "dexel");
   CHECK_FALSE(summary.contains("schedule"));
 }
 
@@ -106,7 +106,7 @@ TEST_CASE("the pipeline cross-checks and schedules", "[run]") {
   CHECK(r.refed.find("F") != std::string::npos);
   const auto summary = nlohmann::json::parse(summaryJson(r));
   CHECK(summary["schedule"]["target_mrr"].get<double>() == Approx(3600.0).epsilon(1e-12));
-  CHECK(summary["cross_check"]["other_model"] == "dexel");
+  CHECK(summary["cross_check"]["other_model"] == "voxel");
 }
 
 TEST_CASE("runIntoFolder writes every file, and a refused job writes none", "[run]") {
@@ -383,11 +383,9 @@ TEST_CASE("a schedule to a chip thickness target holds it when re-simulated", "[
 TEST_CASE("a job's memory estimate follows its stock's closed-form bounds", "[run]") {
   test::TempFolder dir("pipeline_memory");
   const std::string program = dir.write("slot.ngc", test::slotProgram());
-  OptionValues v = {{"program", program},
-                    {"tool", "flat"},
-                    {"diameter", "6mm"},
-                    {"stock", "box:0,0,-10,10,10,0"},
-                    {"voxel", "1mm"}};
+  OptionValues v = {{"program", program},     {"tool", "flat"},
+                    {"diameter", "6mm"},      {"stock", "box:0,0,-10,10,10,0"},
+                    {"stock-model", "voxel"}, {"voxel", "1mm"}};
   // Voxels: (10 / 1 + 2)^3 = 1728 of at most 18 bytes with 10 % slack, on 64 MB for the rest.
   const double voxels = 1728.0 * 18.0 * 1.1;
   CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) == Approx(64e6 + voxels));
