@@ -325,7 +325,9 @@ std::string runReportHtml(const RunResult& result, const std::string& summaryJso
   const std::string title = "engage " + data["command"].get<std::string>() + ": " +
                             std::filesystem::path(job.program).filename().string();
   data["title"] = title;
-  return htmlPage(PageKind::Run, title, data.dump(-1, ' ', false, json::error_handler_t::replace));
+  const std::string text = data.dump(-1, ' ', false, json::error_handler_t::replace);
+  data = json();  // (its nodes are larger than its text)
+  return htmlPage(PageKind::Run, title, text);
 }
 
 }  // namespace engage

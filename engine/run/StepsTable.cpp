@@ -3,6 +3,9 @@
 #include "engine/model/EngagementModel.h"
 #include "engine/units/Quantity.h"
 
+#include <ostream>
+#include <sstream>
+
 namespace engage {
 namespace {
 
@@ -27,7 +30,8 @@ double scheduledAcceleration(const RunResult& result, std::size_t i) {
   return tangentialAcceleration(result.plan.feed[i - 1], result.plan.feed[i], steps[i].length);
 }
 
-std::string stepsTable(const RunResult& result, const std::vector<std::size_t>* rows) {
+void writeStepsTable(std::ostream& os, const RunResult& result,
+                     const std::vector<std::size_t>* rows) {
   const UnitSystem sys = result.job.units;
   const bool schedule = result.job.scheduling();
   const bool cross = result.crossChecked;
@@ -57,30 +61,31 @@ std::string stepsTable(const RunResult& result, const std::vector<std::size_t>* 
                                  ",torque_scheduled_" + T + ",power_scheduled_" + P
                            : std::string()) +
       "\n";
+  os << csv;
   const auto& steps = result.sim.steps;
   const Schedule& plan = result.plan;
   const std::size_t count = rows ? rows->size() : steps.size();
   for (std::size_t r = 0; r < count; ++r) {
     const std::size_t i = rows ? (*rows)[r] : r;
     const StepRecord& s = steps[i];
-    csv += std::to_string(i) + "," + std::to_string(s.move) + "," + std::to_string(s.line) + "," +
-           std::to_string(s.tool) + "," + moveKindName(s.kind) + "," +
-           D(s.arcLength, Dimension::Length) + "," + D(s.end.x(), Dimension::Length) + "," +
-           D(s.end.y(), Dimension::Length) + "," + D(s.end.z(), Dimension::Length) + "," +
-           D(s.feed, Dimension::Feed) + "," + formatNumber(s.dt) + "," +
-           D(s.removed, Dimension::Volume) + "," + D(s.mrr, Dimension::VolumeRate) + "," +
-           D(s.width, Dimension::Length) + "," + D(s.depth, Dimension::Length) + "," +
-           formatNumber(s.engagementRad * kDegree) + "," +
-           formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," +
-           sideName(s.side) + "," + D(s.mrrExact, Dimension::VolumeRate) + "," +
-           D(s.mrrPaper, Dimension::VolumeRate) + "," + std::to_string(s.voxelsChanged) +
-           (schedule ? "," + D(plan.feed[i], Dimension::Feed) + "," + bindingName(plan.binding[i]) +
-                           "," + D(s.mrr * feedScale(result, i), Dimension::VolumeRate) + "," +
-                           D(scheduledAcceleration(result, i), Dimension::Acceleration)
-                     : std::string()) +
-           (cross ? "," + D(result.cross.other.steps[i].removed, Dimension::Volume) +
-                        (result.cross.differs[i] ? ",differs" : ",agrees")
-                  : std::string());
+    csv = std::to_string(i) + "," + std::to_string(s.move) + "," + std::to_string(s.line) + "," +
+          std::to_string(s.tool) + "," + moveKindName(s.kind) + "," +
+          D(s.arcLength, Dimension::Length) + "," + D(s.end.x(), Dimension::Length) + "," +
+          D(s.end.y(), Dimension::Length) + "," + D(s.end.z(), Dimension::Length) + "," +
+          D(s.feed, Dimension::Feed) + "," + formatNumber(s.dt) + "," +
+          D(s.removed, Dimension::Volume) + "," + D(s.mrr, Dimension::VolumeRate) + "," +
+          D(s.width, Dimension::Length) + "," + D(s.depth, Dimension::Length) + "," +
+          formatNumber(s.engagementRad * kDegree) + "," +
+          formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," +
+          sideName(s.side) + "," + D(s.mrrExact, Dimension::VolumeRate) + "," +
+          D(s.mrrPaper, Dimension::VolumeRate) + "," + std::to_string(s.voxelsChanged) +
+          (schedule ? "," + D(plan.feed[i], Dimension::Feed) + "," + bindingName(plan.binding[i]) +
+                          "," + D(s.mrr * feedScale(result, i), Dimension::VolumeRate) + "," +
+                          D(scheduledAcceleration(result, i), Dimension::Acceleration)
+                    : std::string()) +
+          (cross ? "," + D(result.cross.other.steps[i].removed, Dimension::Volume) +
+                       (result.cross.differs[i] ? ",differs" : ",agrees")
+                 : std::string());
     if (physics) {
       // Angles from the feed direction, in the direction of rotation (slot: -90 to 90).
       const StepLoad& l = result.sim.loads[i];
@@ -97,8 +102,14 @@ std::string stepsTable(const RunResult& result, const std::vector<std::size_t>* 
       }
     }
     csv += "\n";
+    os << csv;
   }
-  return csv;
+}
+
+std::string stepsTable(const RunResult& result, const std::vector<std::size_t>* rows) {
+  std::ostringstream os;
+  writeStepsTable(os, result, rows);
+  return os.str();
 }
 
 }  // namespace engage

@@ -8,6 +8,7 @@
 #include "engine/run/Pipeline.h"
 
 #include <cstddef>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,10 @@ namespace engage {
 
 /// The table's text (header and rows); with `rows`, only those steps (ascending indices).
 std::string stepsTable(const RunResult& result, const std::vector<std::size_t>* rows = nullptr);
+/// The same written to `os` row by row (a long run's table is never whole in memory: CAMotics'
+/// tiger's 111,279 steps are 13 MB of text).
+void writeStepsTable(std::ostream& os, const RunResult& result,
+                     const std::vector<std::size_t>* rows = nullptr);
 
 /// Step i's scheduled feed over its programmed one (0 for rapids): the MRR and the chip
 /// scale with it.
