@@ -2,9 +2,9 @@
 """engage (and, where given, CAMotics' camsim) on CAMotics' own example projects, side by side.
 
 For each example (../shared/real-programs/camotics/NAME/NAME.camotics) and grid (the project's
-resolution, and half of it with --half), runs engage's voxel and dexel models and camsim, the
-runs alternating, each --repeats times, on one core (taskset -c 0) and, with --all-cores, on
-all. Prints a Markdown table of medians: whole-process wall time, engage's loop time (its
+resolution, and half of it with --half), runs engage's voxel and dexel models (--models) and
+camsim, the runs alternating, each --repeats times, on one core (taskset -c 0) and, with
+--all-cores, on all. Prints a Markdown table of medians: whole-process wall time, engage's loop time (its
 summary's run_time_s) and the rest (outputs), steps/s, changed cells/s, peak memory (the
 child's maximum resident set), removed volume; and camsim / engage ratios.
 
@@ -14,7 +14,8 @@ automatic workpiece can differ: botomata_bottom's is off its program's second ha
 writes its final surface (binary STL); its removed volume is that box less the surface's.
 
 usage: camotics.py ENGAGE [--camsim PATH] [--examples a,b] [--half] [--repeats 3]
-                          [--all-cores] [--outputs all|tables|summary] [--work DIR]
+                          [--all-cores] [--outputs all|tables|summary] [--models voxel,dexel]
+                          [--work DIR]
 """
 import argparse
 import json
@@ -74,6 +75,8 @@ def main():
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--all-cores", action="store_true", help="also on all cores")
     ap.add_argument("--outputs", default="all", help="engage's --outputs (all: its default)")
+    ap.add_argument("--models", default="voxel,dexel",
+                    help="engage's stock models to run (dexel is its default)")
     ap.add_argument("--work", default="/tmp/engage_bench_camotics")
     args = ap.parse_args()
     shutil.rmtree(args.work, ignore_errors=True)
@@ -88,7 +91,7 @@ def main():
         grids = [spec["resolution"]] + ([spec["resolution"] / 2.0] if args.half else [])
         for grid in grids:
             for one_core in [True] + ([False] if args.all_cores else []):
-                runs = {"engage voxel": [], "engage dexel": []}
+                runs = {"engage " + m: [] for m in args.models.split(",")}
                 if args.camsim:
                     runs["camsim"] = []
                 extra = {}
@@ -106,7 +109,7 @@ def main():
                             extra[label] = s
                             runs[label].append((wall, s["run_time_s"], mem))
                         else:
-                            box = box_of(extra["engage voxel"]["stock"])
+                            box = box_of(extra["engage " + args.models.split(",")[0]]["stock"])
                             copy = dict(spec)
                             copy["workpiece"] = {"automatic": False, "margin": 0,
                                                  "bounds": {"min": box[0], "max": box[1]}}
@@ -124,7 +127,6 @@ def main():
                             size = [box[1][i] - box[0][i] for i in range(3)]
                             extra[label] = size[0] * size[1] * size[2] - stl_volume(stl)
                             runs[label].append((wall, None, mem))
-                base = statistics.median(r[0] for r in runs["engage voxel"])
                 for label, rs in runs.items():
                     wall = statistics.median(r[0] for r in rs)
                     mem = statistics.median(r[2] for r in rs)
@@ -142,9 +144,10 @@ def main():
                             name, grid, "1" if one_core else "all", wall, mem, extra[label]))
                 if args.camsim:
                     cs = statistics.median(r[0] for r in runs["camsim"])
-                    dx = statistics.median(r[0] for r in runs["engage dexel"])
-                    print("| %s | %.3g | %s | camsim / engage | voxel %.2fx, dexel %.2fx | | | | | | |" % (
-                        name, grid, "1" if one_core else "all", cs / base, cs / dx))
+                    ratios = ", ".join("%s %.2fx" % (m, cs / statistics.median(r[0] for r in runs["engage " + m]))
+                                       for m in args.models.split(","))
+                    print("| %s | %.3g | %s | camsim / engage | %s | | | | | | |" % (
+                        name, grid, "1" if one_core else "all", ratios))
                 sys.stdout.flush()
 
 

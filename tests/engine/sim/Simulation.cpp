@@ -4,12 +4,15 @@
 
 #include "cutters/Error.h"
 #include "engine/gcode/GcodeReader.h"
+#include "stock/DexelStock.h"
 #include "stock/VoxelStock.h"
 
 #include <catch2/catch.hpp>
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
+#include <string>
 
 using namespace engage;
 
@@ -212,4 +215,64 @@ TEST_CASE("analytic steps without a stock: the side from the stock's side of the
   }
   o.depth.reset();
   CHECK_THROWS_AS(analyticSteps(path, cutter, o), ParameterError);
+}
+
+TEST_CASE("a retract from where the last step left its cutter removes nothing; others measure",
+          "[sim]") {
+  // A ball end mill (D 6) ramps 0.042 mm down over 12 mm from 0.9 mm below the top face and
+  // retracts straight up: the ramp's last step swept the cutter's body where the retract
+  // starts, and above that body (at Z 12.058 + flutes) there is no stock, so the retract can
+  // reach nothing: exactly 0 (it took 0.042 mm^3 in dexels when measured: the partly covered
+  // columns' shares of one body evaluated twice). A first move straight up from inside the
+  // stock and a new tool's first move up from where the last one stopped are measured: the
+  // flat D 6 body from Z 0 up in a block whose top is Z 5, pi 9 x 5 = 141.37 mm^3; the flat
+  // D 10 after the D 6 plunged 5 mm, the ring between them, pi (25 - 9) 5 = 251.33 mm^3
+  // (within 1 %: the ring's walls are cells of 0.3 mm against radii of 3 and 5 mm).
+  CutterSet tools;
+  tools.byTool.emplace(1, AptCutter::ball(6.0, 18.0));
+  tools.byTool.emplace(2, AptCutter::flat(10.0, 18.0));
+  tools.byTool.emplace(3, AptCutter::flat(6.0, 18.0));
+  auto removedAt = [](const SimulationResult& r, int line) {
+    double v = 0.0;
+    for (const StepRecord& s : r.steps)
+      if (s.line == line) v += s.removed;
+    return v;
+  };
+  for (const char* model : {"voxel", "dexel"}) {
+    INFO(model);
+    auto stockOf = [&](const Box3& b) -> std::unique_ptr<Stock> {
+      if (std::string(model) == "voxel")
+        return std::make_unique<VoxelStock>(VoxelStock::box(b, 0.3));
+      return std::make_unique<DexelStock>(DexelStock::box(b, 0.3));
+    };
+    Box3 block;
+    block.min = {0, 0, 0};
+    block.max = {60, 40, 10};
+    auto s1 = stockOf(block);
+    const SimulationResult ramp = simulate(
+        readProgramText("G21 G90 G17\nT1 M6\nG0 X30 Y5 Z12\nG1 Z9.1 F200\nG1 Y17 Z9.058 F400\n"
+                        "G0 Z12\nM2\n",
+                        "ramp.ngc"),
+        tools, *s1, SimulationOptions{});
+    CHECK(removedAt(ramp, 5) > 10.0);  // the ramp cuts (15.65 mm^3 in the exact reference)
+    CHECK(removedAt(ramp, 6) == 0.0);
+
+    Box3 low;
+    low.min = {-20, -20, -10};
+    low.max = {20, 20, 5};
+    auto s2 = stockOf(low);
+    const SimulationResult first =
+        simulate(readProgramText("G21 G90\nT3 M6\nG1 Z10 F100\nM2\n", "first.ngc"), tools, *s2,
+                 SimulationOptions{});
+    CHECK(removedAt(first, 3) == Approx(kPi * 9 * 5).epsilon(0.01));
+
+    low.max.z() = 0.0;
+    auto s3 = stockOf(low);
+    const SimulationResult change = simulate(
+        readProgramText("G21 G90\nT3 M6\nG0 X0 Y0 Z5\nG1 Z-5 F100\nT2 M6\nG1 Z10 F100\nM2\n",
+                        "change.ngc"),
+        tools, *s3, SimulationOptions{});
+    CHECK(removedAt(change, 4) == Approx(kPi * 9 * 5).epsilon(0.01));
+    CHECK(removedAt(change, 6) == Approx(kPi * 16 * 5).epsilon(0.01));
+  }
 }
