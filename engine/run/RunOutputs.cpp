@@ -58,6 +58,7 @@ PlotSpec plotSpec(const RunResult& result, const std::filesystem::path& dir) {
 WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::path& dir) {
   WrittenOutputs w;
   const Job::Outputs which = result.job.outputs;
+  const StockView view(result);  // the stock as voxels, for its files and the 3D view
   w.steps = which != Job::Outputs::Summary;
   // Row by row into the file, never whole in memory (CAMotics' tiger: 13 MB of text; the
   // run's peak is later, at the report, so it fell by 0.7 MB only).
@@ -95,7 +96,7 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
       writeTable(ps.data, &lines);
     }
     auto plots = std::async(std::launch::async, [&ps] { return writePlots(ps); });
-    w.openEdges = writeStockFiles(result, dir);
+    w.openEdges = writeStockFiles(result, view, dir);
     try {
       for (const std::string& f : plots.get())
         if (f.size() > 4 && f.compare(f.size() - 4, 4, ".png") == 0) w.plots.push_back(f);
@@ -105,12 +106,13 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
     for (const std::string& data : {ps.data, ps.topData})
       if (data != "steps.csv") std::filesystem::remove(dir / data);
   } else if (result.job.keepStock) {
-    writeStockVdb(result, dir);
+    writeStockVdb(view, dir);
   }
   // The page names the other files: it comes last.
   if (result.job.report && which != Job::Outputs::Summary) {
     writeAtomically(dir / "report.html",
-                    runReportHtml(result, summary, shown, w, which == Job::Outputs::All));
+                    runReportHtml(result, summary, shown, w,
+                                  which == Job::Outputs::All ? view.voxels() : nullptr));
     w.report = true;
   }
   return w;

@@ -5,7 +5,6 @@
 #include "engine/run/Output.h"
 #include "engine/run/StepsTable.h"
 #include "engine/units/Quantity.h"
-#include "stock/DexelStock.h"
 #include "stock/VoxelStock.h"
 
 #include <nlohmann/json.hpp>
@@ -138,17 +137,10 @@ json sourceLines(const RunResult& result, const std::vector<std::size_t>& steps)
 
 /// The stock's surface for the 3D view, in display units, with per vertex the step that last
 /// cut there (an index into the returned table's steps, -1 for faces never cut).
-json surfaceJson(const RunResult& result, std::vector<std::size_t>& tableSteps) {
-  std::optional<VoxelStock> fromDexels;
-  const VoxelStock* voxels = dynamic_cast<const VoxelStock*>(result.stock.get());
-  if (!voxels) {
-    const auto* dexels = dynamic_cast<const DexelStock*>(result.stock.get());
-    if (!dexels) return nullptr;
-    fromDexels.emplace(VoxelStock::fromDexels(*dexels));
-    voxels = &*fromDexels;
-  }
+json surfaceJson(const RunResult& result, const VoxelStock& voxels,
+                 std::vector<std::size_t>& tableSteps) {
   double cell = 0.0;
-  const TriangleMesh mesh = voxels->viewMesh(kMaxTriangles, &cell);
+  const TriangleMesh mesh = voxels.viewMesh(kMaxTriangles, &cell);
   const double h = result.stock->resolution();
   // Within a meshing cell and a half of the swept surface; steps below a hundredth of a
   // voxel removed nothing (air).
@@ -258,7 +250,7 @@ std::vector<std::size_t> reportSteps(const RunResult& result, const std::string&
 
 std::string runReportHtml(const RunResult& result, const std::string& summaryJsonText,
                           const std::vector<std::size_t>& kept, const WrittenOutputs& written,
-                          bool withSurface) {
+                          const VoxelStock* surface) {
   const Job& job = result.job;
   const UnitSystem sys = job.units;
   json data;
@@ -315,9 +307,9 @@ std::string runReportHtml(const RunResult& result, const std::string& summaryJso
                           {"all_up_to", kAllSteps},
                           {"buckets", kBuckets}};
   std::vector<std::size_t> lineSteps = kept;
-  if (withSurface && result.stock) {
+  if (surface) {
     std::vector<std::size_t> tableSteps;
-    data["surface"] = surfaceJson(result, tableSteps);
+    data["surface"] = surfaceJson(result, *surface, tableSteps);
     data["surface_steps"] = table(result, columns, tableSteps);
     lineSteps.insert(lineSteps.end(), tableSteps.begin(), tableSteps.end());
   }

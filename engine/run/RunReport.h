@@ -24,17 +24,19 @@
 
 namespace engage {
 
+class VoxelStock;
+
 /// Limits of the report's size (see the header comment).
 inline constexpr std::size_t kAllSteps = 20000;
 inline constexpr std::size_t kBuckets = 4000;
 inline constexpr std::size_t kMaxTriangles = 150000;
 
 /// The page's text. `summaryJson` is summary.json's text; `steps` the steps its plots show
-/// (reportSteps); `written` the files written (named on the page); `withSurface` adds the 3D
-/// view (needs the run's stock).
+/// (reportSteps); `written` the files written (named on the page); `surface`, when given, the
+/// final stock as voxels (StockView) for the 3D view.
 std::string runReportHtml(const RunResult& result, const std::string& summaryJson,
                           const std::vector<std::size_t>& steps, const WrittenOutputs& written,
-                          bool withSurface);
+                          const VoxelStock* surface);
 
 /// The steps the plots keep (all up to `allUpTo`, else the extremes of each of `buckets`
 /// equal runs of steps and the peaks that `summaryJson`, summary.json's text, names), in order.

@@ -48,15 +48,22 @@ def run(cmd, one_core):
 
 
 def stl_volume(path):
-    with open(path, "rb") as f:
-        data = f.read()
-    n = struct.unpack("<I", data[80:84])[0]
+    """The volume inside a binary STL, read a block of triangles at a time: the peak memory of
+    the children measured after it is the most of theirs and of this process's when it forked
+    them (Linux keeps a process's largest resident set across exec), and reading cameo's STL at
+    0.18 mm whole grew this process to 278 MiB, which every later child then reported."""
     v = 0.0
-    for i in range(n):
-        t = struct.unpack("<12f", data[84 + 50 * i: 84 + 50 * i + 48])
-        a, b, c = t[3:6], t[6:9], t[9:12]
-        v += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-              + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0
+    with open(path, "rb") as f:
+        f.seek(80)
+        n = struct.unpack("<I", f.read(4))[0]
+        while n > 0:
+            count = min(n, 20000)
+            data = f.read(50 * count)
+            for t in struct.iter_unpack("<12fH", data):
+                a, b, c = t[3:6], t[6:9], t[9:12]
+                v += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                      + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0
+            n -= count
     return v
 
 

@@ -5,6 +5,7 @@
 #include "engine/run/RunReport.h"
 
 #include "engine/run/Pipeline.h"
+#include "engine/run/StockFiles.h"
 #include "engine/run/Summary.h"
 #include "tests/engine/run/RunTestSupport.h"
 
@@ -71,8 +72,8 @@ TEST_CASE("a run's page carries its summary, its steps and its cut surface", "[r
                                                             {"diameter", "6mm"},
                                                             {"stock", "box:-10,-10,-10,40,10,0"}}));
   const std::string summary = summaryJson(r);
-  const json data =
-      pageData(runReportHtml(r, summary, reportSteps(r, summary), WrittenOutputs{}, true));
+  const json data = pageData(
+      runReportHtml(r, summary, reportSteps(r, summary), WrittenOutputs{}, StockView(r).voxels()));
   CHECK(data["summary"] == json::parse(summary));
   // Fewer steps than kAllSteps: every one, in order, with its line.
   const json& s = data["series"];
