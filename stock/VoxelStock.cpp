@@ -939,26 +939,91 @@ struct ColumnFootprint {
 VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
   initVdb();
   auto impl = std::make_unique<Impl>();
-  impl->h = d.resolution();
+  const double h = d.resolution();
+  impl->h = h;
   impl->grid = FloatGrid::create(0.0f);
-  impl->grid->setTransform(openvdb::math::Transform::createLinearTransform(impl->h));
+  impl->grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
   impl->grid->setName("stock");
   impl->grid->setGridClass(openvdb::GRID_FOG_VOLUME);
   // Each voxel gets the material of the columns it overlaps: volume share x the interval's
-  // share x the column's weight.
+  // share x the column's weight. Voxel column by voxel column, its four dexel columns' material
+  // per height summed in an array (as writeRemovedVdb merges their losses); the voxels below 1
+  // written one by one, and the run of full ones each 8 x 8 block of voxel columns shares as
+  // one box (tiles where it covers whole leaves), the rest of each run one by one. Each voxel
+  // added into the grid from each of its columns one at a time (169 million reads and writes
+  // for the finishing benchmark at 0.1 mm) took 1.08 of the run's 11.3 s.
+  const ColumnFootprint corner(d, 0, 0);
+  const int nx = d.raysX(), ny = d.raysY();
+  const int ax = nx + 1, by = ny + 1;  // voxel columns (corner.cx + a, corner.cy + b)
+  struct FullRun {
+    int k0 = 1, k1 = 0;  // [k0, k1] all 1; empty when k0 > k1
+  };
+  std::vector<FullRun> full(static_cast<std::size_t>(ax) * static_cast<std::size_t>(by));
   auto acc = impl->grid->getAccessor();
-  for (int j = 0; j < d.raysY(); ++j)
-    for (int i = 0; i < d.raysX(); ++i) {
-      const double weight = d.weight(i, j);
-      if (weight <= 0.0) continue;
-      const ColumnFootprint column(d, i, j);
-      for (const DexelStock::Interval& iv : d.ray(i, j))
-        DexelStock::voxelHeights(d.resolution(), iv.z0, iv.z1, [&](int k, double z) {
-          column.at(k, z, [&](const Coord& c, double share) {
-            acc.setValue(
-                c, static_cast<float>(std::min(1.0, acc.getValue(c) + share * iv.f * weight)));
+  std::vector<double> merged;
+  for (int b = 0; b < by; ++b)
+    for (int a = 0; a < ax; ++a) {
+      struct Part {
+        int i, j;
+        double share;
+      } parts[4];
+      int count = 0;
+      int kLow = std::numeric_limits<int>::max(), kHigh = std::numeric_limits<int>::min();
+      for (int di = 0; di < 2; ++di)
+        for (int dj = 0; dj < 2; ++dj) {
+          const int i = a - di, j = b - dj;
+          if (i < 0 || i >= nx || j < 0 || j >= ny) continue;
+          const double share = corner.share(di, dj) * d.weight(i, j);
+          const auto& ray = d.ray(i, j);
+          if (!(share > 0.0) || ray.empty()) continue;
+          parts[count++] = {i, j, share};
+          kLow = std::min(kLow, static_cast<int>(std::floor(ray.front().z0 / h + 0.5)));
+          kHigh = std::max(kHigh, static_cast<int>(std::floor(ray.back().z1 / h + 0.5)));
+        }
+      if (count == 0) continue;
+      merged.assign(static_cast<std::size_t>(kHigh - kLow + 1), 0.0);
+      for (int p = 0; p < count; ++p)
+        for (const DexelStock::Interval& iv : d.ray(parts[p].i, parts[p].j))
+          DexelStock::voxelHeights(h, iv.z0, iv.z1, [&](int k, double z) {
+            merged[static_cast<std::size_t>(k - kLow)] += z * iv.f * parts[p].share;
           });
-        });
+      FullRun& run = full[static_cast<std::size_t>(b) * static_cast<std::size_t>(ax) +
+                          static_cast<std::size_t>(a)];
+      for (int k = kLow; k <= kHigh; ++k) {
+        const auto v =
+            static_cast<float>(std::min(1.0, merged[static_cast<std::size_t>(k - kLow)]));
+        if (v == 1.0f && (run.k0 > run.k1 || run.k1 == k - 1)) {
+          if (run.k0 > run.k1) run.k0 = k;
+          run.k1 = k;  // (a column's first run of full voxels; later ones go one by one)
+        } else if (v > 0.0f) {
+          acc.setValue(Coord(corner.cx + a, corner.cy + b, k), v);
+        }
+      }
+    }
+  for (int b0 = 0; b0 < by; b0 += 8)
+    for (int a0 = 0; a0 < ax; a0 += 8) {
+      // The heights every column of the block is full at, as one box.
+      int k0 = std::numeric_limits<int>::min(), k1 = std::numeric_limits<int>::max();
+      for (int b = b0; b < std::min(by, b0 + 8); ++b)
+        for (int a = a0; a < std::min(ax, a0 + 8); ++a) {
+          const FullRun& run = full[static_cast<std::size_t>(b) * static_cast<std::size_t>(ax) +
+                                    static_cast<std::size_t>(a)];
+          k0 = std::max(k0, run.k0);
+          k1 = std::min(k1, run.k1);
+        }
+      if (k0 <= k1)
+        impl->grid->tree().fill(CoordBBox(Coord(corner.cx + a0, corner.cy + b0, k0),
+                                          Coord(corner.cx + std::min(ax, a0 + 8) - 1,
+                                                corner.cy + std::min(by, b0 + 8) - 1, k1)),
+                                1.0f, true);
+      acc.clear();  // (the box may have replaced nodes the accessor holds)
+      for (int b = b0; b < std::min(by, b0 + 8); ++b)
+        for (int a = a0; a < std::min(ax, a0 + 8); ++a) {
+          const FullRun& run = full[static_cast<std::size_t>(b) * static_cast<std::size_t>(ax) +
+                                    static_cast<std::size_t>(a)];
+          for (int k = run.k0; k <= run.k1; ++k)
+            if (k < k0 || k > k1) acc.setValue(Coord(corner.cx + a, corner.cy + b, k), 1.0f);
+        }
     }
   impl->grid->tree().prune();
   return VoxelStock(std::move(impl));
