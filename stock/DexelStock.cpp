@@ -274,10 +274,25 @@ double lowestAt(const AptCutter& c, double rho) {
 
 /// Minimum of f over [lo, hi] by golden-section search down to `tol` in t, with both ends
 /// compared: exact for functions convex on the interval; +inf for an empty interval. Where
-/// it is taken goes to `at` when given.
+/// it is taken goes to `at` when given. With `endsFirst` (for f convex: along a line), an end
+/// first: where f does not fall from it over `tol`, the minimum is within `tol` of it and the
+/// search is skipped (most of a short step's columns, ahead of or behind the cutter, have it
+/// at an end). Along arcs, not convex, that made a helical bore's worst step 0.47 -> 0.54 %.
 template <class F>
-double minimumOn(const F& f, double lo, double hi, double tol, double* at = nullptr) {
+double minimumOn(const F& f, double lo, double hi, double tol, bool endsFirst,
+                 double* at = nullptr) {
   if (!(hi >= lo)) return std::numeric_limits<double>::infinity();
+  const double fLo = f(lo), fHi = f(hi);
+  auto take = [&](double v, double t) {
+    if (at) *at = t;
+    return v;
+  };
+  if (endsFirst && hi - lo > 4.0 * tol) {
+    const double fIn = f(lo + tol);
+    if (fLo <= fIn) return take(fLo, lo);
+    const double fOut = f(hi - tol);
+    if (fHi <= fOut) return take(fHi, hi);
+  }
   constexpr double g = 0.38196601125010515;  // 2 - golden ratio
   double a = lo, b = hi;
   double x1 = a + g * (b - a), x2 = b - g * (b - a);
@@ -297,12 +312,11 @@ double minimumOn(const F& f, double lo, double hi, double tol, double* at = null
       f2 = f(x2);
     }
   }
-  const double candidates[4][2] = {{f1, x1}, {f2, x2}, {f(lo), lo}, {f(hi), hi}};
+  const double candidates[4][2] = {{f1, x1}, {f2, x2}, {fLo, lo}, {fHi, hi}};
   int best = 0;
   for (int k = 1; k < 4; ++k)
     if (candidates[k][0] < candidates[best][0]) best = k;
-  if (at) *at = candidates[best][1];
-  return candidates[best][0];
+  return take(candidates[best][0], candidates[best][1]);
 }
 
 /// One column seen from a step that changes height (a ramp, or a helix piece about a vertical
@@ -469,7 +483,8 @@ void rampBand(const StepPath& path, const AptCutter& cutter, const Eigen::Vector
   // volumes +0.007 % and +0.024 %; the ramps anywhere on the grid (bench_stock_accuracy)
   // worst step 0.233 -> 0.248 %, total 0.034 -> 0.042 % (the searches had stopped up to 1e-2
   // of the step short of the range's end), the thin cuts' figures unchanged.
-  const bool flatLine = cutter.shape() == CutterShape::Flat && path.kind == StepPath::Kind::Line;
+  const bool line = path.kind == StepPath::Kind::Line;
+  const bool flatLine = cutter.shape() == CutterShape::Flat && line;
   auto lowest = [&](double delta, std::pair<double, double> range) {
     auto f = [&](double t) {
       return col.z(t) + lowestAt(cutter, std::max(0.0, col.rho(t) + delta));
@@ -477,7 +492,7 @@ void rampBand(const StepPath& path, const AptCutter& cutter, const Eigen::Vector
     if (flatLine)  // (z alone: lowestAt at the range's ends may round to beyond the radius)
       return range.first > range.second ? std::numeric_limits<double>::infinity()
                                         : std::min(col.z(range.first), col.z(range.second));
-    return minimumOn(f, range.first, range.second, tTol);
+    return minimumOn(f, range.first, range.second, tTol, line);
   };
   const double zNone = lowest(-margin, reach);
   if (zNone >= rayTop) return;
@@ -508,7 +523,7 @@ void rampBand(const StepPath& path, const AptCutter& cutter, const Eigen::Vector
       }
     } else {
       d = minimumOn([&](double t) { return col.rho(t) - cutter.radiusAt(zs - col.z(t)); }, t0, t1,
-                    tTol, &tNearest);
+                    tTol, line, &tNearest);
     }
     away = q - path.at(tNearest).head<2>();
     const double norm = away.norm();
