@@ -85,8 +85,8 @@ std::string htmlPage(PageKind kind, const std::string& title, const std::string&
     page += script(reportAsset("three.min.js"), "three.min.js");
     page += script(reportAsset("OrbitControls.js"), "OrbitControls.js");
   }
-  // The data (megabytes for a long run) straight into the page, grown once: through a copy
-  // and two temporaries it was a sixth of CAMotics' tiger's peak memory.
+  // The data (megabytes for a long run: 3 MB for CAMotics' tiger) straight into the page,
+  // grown once, where it went through a copy and two temporaries of its size.
   page.reserve(page.size() + dataJson.size() + dataJson.size() / 64 + (1 << 16) +
                reportAsset("report.js").size());
   page += "<script id=\"engage-data\" type=\"application/json\">";
