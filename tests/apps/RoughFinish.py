@@ -94,18 +94,22 @@ for model in ("voxel", "dexel"):
           "%s: finish starts from %.4f mm^3, rough left %.4f mm^3" % (model, before,
                                                                      stock_after(o("rough"))))
 
-# Another voxel size: resampled by overlap, the volume kept; in either model.
-for model in ("voxel", "dexel"):
-    f017 = os.path.join(OUT, model + "_finish_017")
+# Another voxel size: resampled by overlap, the volume kept; in either model from the voxel
+# rough, and as dexels (the default) from the dexel rough. Its first rapid leaves from the
+# stock's top corner: exit 0 says it met nothing there (a corner's resampled material had
+# risen above the top face).
+for model, rough in (("voxel", "voxel"), ("dexel", "voxel"), ("dexel", "dexel")):
+    f017 = os.path.join(OUT, "%s_finish_017_from_%s" % (model, rough))
     run(["simulate", os.path.join(RF, "finish.ngc")] + TOOL +
-        ["--stock-model", model, "--stock", os.path.join(OUT, "voxel_rough", "stock.vdb"),
+        ["--stock-model", model, "--stock", os.path.join(OUT, rough + "_rough", "stock.vdb"),
          "--voxel", "0.17mm", "--out", f017])
     before = summary(f017)["volume_before"]
-    left = stock_after(os.path.join(OUT, "voxel_rough"))
+    left = stock_after(os.path.join(OUT, rough + "_rough"))
     check(abs(before - left) <= 1e-5 * before,
-          "%s at 0.17 mm from 0.3 mm voxels: %.4f vs %.4f mm^3" % (model, before, left))
+          "%s at 0.17 mm from 0.3 mm %ss: %.4f vs %.4f mm^3" % (model, rough, before, left))
     check(abs(removed(f017) - FINISH) <= 1e-2 * FINISH,
-          "%s: finish at 0.17 mm from 0.3 mm: %.3f vs %.3f mm^3" % (model, removed(f017), FINISH))
+          "%s: finish at 0.17 mm from 0.3 mm %ss: %.3f vs %.3f mm^3" % (model, rough, removed(f017),
+                                                                       FINISH))
 
 # The batch example: finish after rough, from its stock.
 b = os.path.join(OUT, "batch")
