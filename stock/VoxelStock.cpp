@@ -907,30 +907,36 @@ VoxelStock::~VoxelStock() = default;
 
 namespace {
 
-/// The four voxel columns (of the dexels' spacing h) that dexel column (i, j) overlaps, with
-/// the share of each: column (i, j) covers [x0 + i h, x0 + (i + 1) h] (and likewise in y),
-/// voxel c covers [(c - 1/2) h, (c + 1/2) h].
+/// How a dexel stock's columns lie on voxel columns of the same spacing h: dexel column (i, j)
+/// covers [x0 + i h, x0 + (i + 1) h] (and likewise in y), voxel c covers [(c - 1/2) h,
+/// (c + 1/2) h], so each dexel column overlaps four voxel columns and each voxel column
+/// (cx + a, cy + b) the dexel columns a - 1 .. a, b - 1 .. b.
 struct ColumnFootprint {
-  int cx = 0, cy = 0;         // the first voxel column; the others + 1 in x and y
-  double wx = 0.0, wy = 0.0;  // the share in cx (cy); the rest in cx + 1 (cy + 1)
+  int cx = 0, cy = 0;         // the first voxel column of dexel column (0, 0); the others + 1
+  double wx = 0.0, wy = 0.0;  // the share of a dexel column in its first voxel column's x (y)
 
-  ColumnFootprint(const DexelStock& d, int i, int j) {
+  explicit ColumnFootprint(const DexelStock& d) {
     const double h = d.resolution();
     auto first = [&](double a0, int& c0, double& w0) {  // the voxels over [a0, a0 + h]
       c0 = static_cast<int>(std::floor(a0 / h + 0.5));
       w0 = ((c0 + 0.5) * h - a0) / h;
     };
-    first(d.originX() + i * h, cx, wx);
-    first(d.originY() + j * h, cy, wy);
+    first(d.originX(), cx, wx);
+    first(d.originY(), cy, wy);
   }
-  /// The share of the column in voxel column (cx + a, cy + b), a and b 0 or 1.
+  /// The share of a dexel column in the voxel column (a, b) of its four, a and b 0 or 1.
   double share(int a, int b) const { return (a ? 1.0 - wx : wx) * (b ? 1.0 - wy : wy); }
-  /// fn(voxel, share of the voxel) for the four voxels at height index k filled to `z`.
+  /// fn(i, j, share) for each dexel column of `d` that voxel column (cx + a, cy + b) overlaps,
+  /// with the share of that dexel column in it, where it is above 0.
   template <typename Fn>
-  void at(int k, double z, Fn&& fn) const {
-    for (int a = 0; a < 2; ++a)
-      for (int b = 0; b < 2; ++b)
-        if (share(a, b) > 0.0) fn(Coord(cx + a, cy + b, k), z * share(a, b));
+  void columnsOf(const DexelStock& d, int a, int b, Fn&& fn) const {
+    for (int di = 0; di < 2; ++di)
+      for (int dj = 0; dj < 2; ++dj) {
+        const int i = a - di, j = b - dj;
+        if (i < 0 || i >= d.raysX() || j < 0 || j >= d.raysY()) continue;
+        const double s = share(di, dj);
+        if (s > 0.0) fn(i, j, s);
+      }
   }
 };
 
@@ -952,7 +958,7 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
   // one box (tiles where it covers whole leaves), the rest of each run one by one. Each voxel
   // added into the grid from each of its columns one at a time (169 million reads and writes
   // for the finishing benchmark at 0.1 mm) took 1.08 of the run's 11.3 s.
-  const ColumnFootprint corner(d, 0, 0);
+  const ColumnFootprint corner(d);
   const int nx = d.raysX(), ny = d.raysY();
   const int ax = nx + 1, by = ny + 1;  // voxel columns (corner.cx + a, corner.cy + b)
   struct FullRun {
@@ -969,17 +975,14 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
       } parts[4];
       int count = 0;
       int kLow = std::numeric_limits<int>::max(), kHigh = std::numeric_limits<int>::min();
-      for (int di = 0; di < 2; ++di)
-        for (int dj = 0; dj < 2; ++dj) {
-          const int i = a - di, j = b - dj;
-          if (i < 0 || i >= nx || j < 0 || j >= ny) continue;
-          const double share = corner.share(di, dj) * d.weight(i, j);
-          const auto& ray = d.ray(i, j);
-          if (!(share > 0.0) || ray.empty()) continue;
-          parts[count++] = {i, j, share};
-          kLow = std::min(kLow, static_cast<int>(std::floor(ray.front().z0 / h + 0.5)));
-          kHigh = std::max(kHigh, static_cast<int>(std::floor(ray.back().z1 / h + 0.5)));
-        }
+      corner.columnsOf(d, a, b, [&](int i, int j, double inVoxel) {
+        const double share = inVoxel * d.weight(i, j);
+        const auto& ray = d.ray(i, j);
+        if (!(share > 0.0) || ray.empty()) return;
+        parts[count++] = {i, j, share};
+        kLow = std::min(kLow, static_cast<int>(std::floor(ray.front().z0 / h + 0.5)));
+        kHigh = std::max(kHigh, static_cast<int>(std::floor(ray.back().z1 / h + 0.5)));
+      });
       if (count == 0) continue;
       merged.assign(static_cast<std::size_t>(kHigh - kLow + 1), 0.0);
       for (int p = 0; p < count; ++p)
@@ -1054,9 +1057,7 @@ void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
     double removed = 0.0;
     int step = std::numeric_limits<int>::max();  // the first step to reach it
   };
-  // Voxel column (cx0 + a, cy0 + b) overlaps dexel columns (a - 1 .. a, b - 1 .. b), the
-  // shares of each the footprint's (the dexels and the voxels have one spacing).
-  const ColumnFootprint corner(d, 0, 0);
+  const ColumnFootprint corner(d);
   const int nx = d.raysX(), ny = d.raysY();
   std::vector<Height> merged;
   for (int b = 0; b <= ny; ++b)
@@ -1067,17 +1068,13 @@ void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
       } parts[4];
       int count = 0;
       int kLow = std::numeric_limits<int>::max(), kHigh = std::numeric_limits<int>::min();
-      for (int di = 0; di < 2; ++di)
-        for (int dj = 0; dj < 2; ++dj) {
-          const int i = a - di, j = b - dj;
-          if (i < 0 || i >= nx || j < 0 || j >= ny) continue;
-          const DexelStock::LostColumn* c = d.removedColumn(i, j);
-          const double share = corner.share(di, dj);
-          if (!c || c->cells.empty() || !(share > 0.0)) continue;
-          parts[count++] = {c, share};
-          kHigh = std::max(kHigh, c->top);
-          kLow = std::min(kLow, c->top - static_cast<int>(c->cells.size()) + 1);
-        }
+      corner.columnsOf(d, a, b, [&](int i, int j, double share) {
+        const DexelStock::LostColumn* c = d.removedColumn(i, j);
+        if (!c || c->cells.empty()) return;
+        parts[count++] = {c, share};
+        kHigh = std::max(kHigh, c->top);
+        kLow = std::min(kLow, c->top - static_cast<int>(c->cells.size()) + 1);
+      });
       if (count == 0) continue;
       merged.assign(static_cast<std::size_t>(kHigh - kLow + 1), Height{});
       for (int p = 0; p < count; ++p) {
