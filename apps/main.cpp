@@ -18,6 +18,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include <link.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include <csignal>
 #include <exception>
 #include <functional>
@@ -31,9 +35,30 @@ extern "C" void onStopSignal(int sig) {
   std::signal(sig, SIG_DFL);
 }
 
+/// Gives back the pages of a shared library's first read-only segment (its ELF header, symbol
+/// names, hash table and relocations), which the dynamic loader read while it relocated the
+/// library before main. OpenVDB's symbol names alone are 22 MB, and relocating its 52,000
+/// symbol references touched nearly all of them: 26 MB of the process's 35 MB at start, and
+/// of its peak resident set (CAMotics' tiger: 109 of 109 MB). The pages are clean copies of
+/// the file, never written (the segment is mapped read-only), so a later lookup (a lazily
+/// bound call) reads its page again from the page cache.
+int releaseLoaderTables(dl_phdr_info* info, size_t, void*) {
+  if (!info->dlpi_name || info->dlpi_name[0] != '/') return 0;  // the program, the vDSO
+  const auto page = static_cast<ElfW(Addr)>(sysconf(_SC_PAGESIZE));
+  for (int i = 0; i < info->dlpi_phnum; ++i) {
+    const ElfW(Phdr)& ph = info->dlpi_phdr[i];
+    if (ph.p_type != PT_LOAD || ph.p_flags != PF_R || ph.p_offset != 0) continue;
+    const ElfW(Addr) begin = info->dlpi_addr + ph.p_vaddr;
+    const ElfW(Addr) end = (begin + ph.p_memsz) / page * page;  // whole pages only
+    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_DONTNEED);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  dl_iterate_phdr(releaseLoaderTables, nullptr);
   CLI::App app{
       "engage: material-engagement simulator and adaptive feedrate scheduler for CNC "
       "milling"};

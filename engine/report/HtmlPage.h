@@ -5,7 +5,10 @@
 /// report.js. Also the encodings the data uses.
 
 #include <cstddef>
+#include <iosfwd>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace engage {
 
@@ -15,8 +18,11 @@ enum class PageKind {
   Batch  ///< a batch: one row per job with its status, figures and a link to its report
 };
 
-/// The page: `title` (plain text) and `dataJson` (a JSON object, read by report.js as
-/// ENGAGE.data) with the libraries `kind` needs.
+/// Write the page: `title` (plain text) and `dataJson` (a JSON object, read by report.js as
+/// ENGAGE.data, in consecutive pieces that no "</" straddles) with the libraries `kind` needs.
+void writeHtmlPage(std::ostream& os, PageKind kind, const std::string& title,
+                   const std::vector<std::string_view>& dataJson);
+/// The same page as a string.
 std::string htmlPage(PageKind kind, const std::string& title, const std::string& dataJson);
 
 /// Standard base64 (RFC 4648, padded) of `bytes` bytes at `data`: how the page carries

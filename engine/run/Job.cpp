@@ -365,6 +365,11 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   if (maxSteps < 1) throw ParameterError("--max-steps must be positive");
   ro.maxMoves = static_cast<std::size_t>(maxMoves);
   job.path = project ? readPrograms(project->files, ro) : readProgram(job.program, ro);
+  // Only a re-fed program is written back, from its words' positions: a run that is not
+  // keeps none (CAMotics' tiger's 67,424 lines: 3.2 MB of the run's peak).
+  if (command != JobCommand::Schedule)
+    for (SourceBlock& b : job.path.blocks)
+      std::vector<WordSpan>().swap(b.words);
   if (project && project->files.size() > 1 && command == JobCommand::Schedule)
     throw ParameterError(job.program + ": schedule re-feeds one program and this project runs " +
                          std::to_string(project->files.size()) +

@@ -110,9 +110,10 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
   }
   // The page names the other files: it comes last.
   if (result.job.report && which != Job::Outputs::Summary) {
-    writeAtomically(dir / "report.html",
-                    runReportHtml(result, summary, shown, w,
-                                  which == Job::Outputs::All ? view.voxels() : nullptr));
+    writeFileAtomically((dir / "report.html").string(), [&](std::ostream& os) {
+      writeRunReportHtml(os, result, summary, shown, w,
+                         which == Job::Outputs::All ? view.voxels() : nullptr);
+    });
     w.report = true;
   }
   return w;

@@ -1,5 +1,6 @@
 #include "engine/run/RunReport.h"
 
+#include "cutters/Error.h"
 #include "engine/report/HtmlPage.h"
 #include "engine/report/SurfaceSteps.h"
 #include "engine/run/Output.h"
@@ -13,9 +14,12 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
+#include <string_view>
 
 namespace engage {
 namespace {
@@ -45,55 +49,53 @@ json value(double v) {
   return std::stod(formatNumber(v));
 }
 
-/// One column of the plots' table.
+/// One column of the plots' table: its value at a step of the run, display units. Computed
+/// where read, not held per step (the report's seven to seventeen columns of all of tiger's
+/// 111,279 steps, 6.2 MB, were at the run's peak).
 struct Column {
   std::string name;
-  std::vector<double> values;  ///< per step of the run, display units
+  std::function<double(std::size_t)> at;
 };
 
 /// The series along the path, per step of the run, display units.
 std::vector<Column> stepColumns(const RunResult& result) {
   const UnitSystem sys = result.job.units;
-  const auto& steps = result.sim.steps;
+  const StepRecord* steps = result.sim.steps.data();
+  const RunResult* run = &result;
   const bool schedule = result.job.scheduling();
   const bool physics = !result.sim.loads.empty();
   std::vector<Column> c;
-  auto add = [&](const std::string& name, auto&& fn) {
-    Column col{name, std::vector<double>(steps.size())};
-    for (std::size_t i = 0; i < steps.size(); ++i)
-      col.values[i] = fn(i);
-    c.push_back(std::move(col));
+  // Each column reads the run through the pointers above (the columns outlive this call).
+  auto add = [&](const std::string& name, Dimension d, auto fn) {
+    c.push_back({name, [fn, d, sys](std::size_t i) { return toDisplay(fn(i), d, sys); }});
   };
-  auto D = [&](double v, Dimension d) { return toDisplay(v, d, sys); };
-  add("arc", [&](std::size_t i) { return D(steps[i].arcLength, Dimension::Length); });
-  add("x", [&](std::size_t i) { return D(steps[i].end.x(), Dimension::Length); });
-  add("y", [&](std::size_t i) { return D(steps[i].end.y(), Dimension::Length); });
-  add("z", [&](std::size_t i) { return D(steps[i].end.z(), Dimension::Length); });
-  add("mrr", [&](std::size_t i) { return D(steps[i].mrr, Dimension::VolumeRate); });
-  add("mrr_exact", [&](std::size_t i) { return D(steps[i].mrrExact, Dimension::VolumeRate); });
-  add("feed", [&](std::size_t i) { return D(steps[i].feed, Dimension::Feed); });
+  add("arc", Dimension::Length, [steps](std::size_t i) { return steps[i].arcLength; });
+  add("x", Dimension::Length, [steps](std::size_t i) { return steps[i].end.x(); });
+  add("y", Dimension::Length, [steps](std::size_t i) { return steps[i].end.y(); });
+  add("z", Dimension::Length, [steps](std::size_t i) { return steps[i].end.z(); });
+  add("mrr", Dimension::VolumeRate, [steps](std::size_t i) { return steps[i].mrr; });
+  add("mrr_exact", Dimension::VolumeRate, [steps](std::size_t i) { return steps[i].mrrExact; });
+  add("feed", Dimension::Feed, [steps](std::size_t i) { return steps[i].feed; });
   if (schedule) {
-    add("feed_scheduled", [&](std::size_t i) { return D(result.plan.feed[i], Dimension::Feed); });
-    add("mrr_scheduled", [&](std::size_t i) {
-      return D(steps[i].mrr * feedScale(result, i), Dimension::VolumeRate);
-    });
-    add("acceleration", [&](std::size_t i) {
-      return D(scheduledAcceleration(result, i), Dimension::Acceleration);
-    });
+    add("feed_scheduled", Dimension::Feed, [run](std::size_t i) { return run->plan.feed[i]; });
+    add("mrr_scheduled", Dimension::VolumeRate,
+        [run](std::size_t i) { return run->sim.steps[i].mrr * feedScale(*run, i); });
+    add("acceleration", Dimension::Acceleration,
+        [run](std::size_t i) { return scheduledAcceleration(*run, i); });
   }
   if (physics) {
-    const auto& loads = result.sim.loads;
-    add("h_max", [&](std::size_t i) { return D(loads[i].hMax, Dimension::Length); });
-    add("f_peak", [&](std::size_t i) { return D(loads[i].peak, Dimension::Force); });
-    add("torque", [&](std::size_t i) { return D(loads[i].torque, Dimension::Torque); });
-    add("power", [&](std::size_t i) { return D(loads[i].power, Dimension::Power); });
+    const StepLoad* loads = result.sim.loads.data();
+    add("h_max", Dimension::Length, [loads](std::size_t i) { return loads[i].hMax; });
+    add("f_peak", Dimension::Force, [loads](std::size_t i) { return loads[i].peak; });
+    add("torque", Dimension::Torque, [loads](std::size_t i) { return loads[i].torque; });
+    add("power", Dimension::Power, [loads](std::size_t i) { return loads[i].power; });
     if (schedule) {
-      auto scaled = [&](std::size_t i) { return scaleLoad(loads[i], feedScale(result, i)); };
-      add("h_max_scheduled", [&](std::size_t i) { return D(scaled(i).hMax, Dimension::Length); });
-      add("f_peak_scheduled", [&](std::size_t i) { return D(scaled(i).peak, Dimension::Force); });
-      add("torque_scheduled",
-          [&](std::size_t i) { return D(scaled(i).torque, Dimension::Torque); });
-      add("power_scheduled", [&](std::size_t i) { return D(scaled(i).power, Dimension::Power); });
+      auto scaled = [run, loads](std::size_t i) { return scaleLoad(loads[i], feedScale(*run, i)); };
+      add("h_max_scheduled", Dimension::Length, [scaled](std::size_t i) { return scaled(i).hMax; });
+      add("f_peak_scheduled", Dimension::Force, [scaled](std::size_t i) { return scaled(i).peak; });
+      add("torque_scheduled", Dimension::Torque,
+          [scaled](std::size_t i) { return scaled(i).torque; });
+      add("power_scheduled", Dimension::Power, [scaled](std::size_t i) { return scaled(i).power; });
     }
   }
   return c;
@@ -106,31 +108,28 @@ const Column* find(const std::vector<Column>& c, const std::string& name) {
 }
 
 /// The source lines of the given steps, "file:line" -> text (main program and subroutine files).
+/// Each file is read once, line by line, keeping the lines asked for (a program held whole as
+/// a vector of lines, CAMotics' tiger's 2 MB as 8.8 MB of strings, was at the run's peak).
 json sourceLines(const RunResult& result, const std::vector<std::size_t>& steps) {
   const Toolpath& path = result.job.path;
-  std::map<int, std::vector<std::string>> files;
-  json out = json::object();
+  std::map<int, std::set<int>> wanted;  // file -> its lines
   for (std::size_t s : steps) {
     const StepRecord& r = result.sim.steps[s];
-    const int file = path.moves[r.move].file;
-    const std::string key = std::to_string(file) + ":" + std::to_string(r.line);
-    if (out.contains(key)) continue;
-    auto it = files.find(file);
-    if (it == files.end()) {
-      std::vector<std::string> lines;
-      try {
-        std::istringstream in(readFile(path.files[static_cast<std::size_t>(file)]));
-        for (std::string l; std::getline(in, l);) {
-          if (!l.empty() && l.back() == '\r') l.pop_back();
-          lines.push_back(l.size() > 200 ? l.substr(0, 200) + "..." : l);
-        }
-      } catch (const Error&) {
-        // A program read from a generated text (a pocket) has no file: lines stay unnamed.
-      }
-      it = files.emplace(file, std::move(lines)).first;
+    if (r.line >= 1) wanted[path.moves[r.move].file].insert(r.line);
+  }
+  json out = json::object();
+  for (const auto& [file, lines] : wanted) {
+    // A program read from a generated text (a pocket) has no file: its lines stay unnamed.
+    std::ifstream in(path.files[static_cast<std::size_t>(file)], std::ios::binary);
+    auto next = lines.begin();
+    int number = 0;
+    for (std::string l; next != lines.end() && std::getline(in, l);) {
+      if (++number != *next) continue;
+      if (!l.empty() && l.back() == '\r') l.pop_back();
+      out[std::to_string(file) + ":" + std::to_string(number)] =
+          l.size() > 200 ? l.substr(0, 200) + "..." : l;
+      ++next;
     }
-    if (r.line >= 1 && static_cast<std::size_t>(r.line) <= it->second.size())
-      out[key] = it->second[static_cast<std::size_t>(r.line - 1)];
   }
   return out;
 }
@@ -177,30 +176,32 @@ json surfaceJson(const RunResult& result, const VoxelStock& voxels,
           {"vertex_row", base64(vertexRow.data(), vertexRow.size() * sizeof(std::int32_t))}};
 }
 
-/// Columns of the given steps: step, file, line, tool, and every series.
-json table(const RunResult& result, const std::vector<Column>& columns,
-           const std::vector<std::size_t>& which) {
+/// Columns of the given steps as JSON text: step, file, line, tool, and every series (numbers
+/// as value() gives them). Written as text, where nlohmann::json's nodes for tiger's 12,400
+/// plotted steps (4.3 MB) had been the report's peak.
+std::string table(const RunResult& result, const std::vector<Column>& columns,
+                  const std::vector<std::size_t>& which) {
   const Toolpath& path = result.job.path;
-  json t = json::object();
-  json step = json::array(), file = json::array(), line = json::array(), tool = json::array();
-  for (std::size_t s : which) {
-    const StepRecord& r = result.sim.steps[s];
-    step.push_back(s);
-    file.push_back(path.moves[r.move].file);
-    line.push_back(r.line);
-    tool.push_back(r.tool);
-  }
-  t["step"] = std::move(step);
-  t["file"] = std::move(file);
-  t["line"] = std::move(line);
-  t["tool"] = std::move(tool);
-  for (const Column& c : columns) {
-    json v = json::array();
-    for (std::size_t s : which)
-      v.push_back(value(c.values[s]));
-    t[c.name] = std::move(v);
-  }
-  return t;
+  std::string t = "{";
+  auto column = [&](const std::string& name, auto&& text) {
+    t += (t.size() > 1 ? ",\"" : "\"") + name + "\":[";
+    for (std::size_t k = 0; k < which.size(); ++k) {
+      if (k > 0) t += ',';
+      t += text(which[k]);
+    }
+    t += ']';
+  };
+  const auto& steps = result.sim.steps;
+  column("step", [](std::size_t s) { return std::to_string(s); });
+  column("file", [&](std::size_t s) { return std::to_string(path.moves[steps[s].move].file); });
+  column("line", [&](std::size_t s) { return std::to_string(steps[s].line); });
+  column("tool", [&](std::size_t s) { return std::to_string(steps[s].tool); });
+  for (const Column& c : columns)
+    column(c.name, [&](std::size_t s) {
+      const double v = c.at(s);
+      return std::isfinite(v) ? formatNumber(v) : std::string("null");
+    });
+  return t + "}";
 }
 
 }  // namespace
@@ -238,9 +239,13 @@ std::vector<std::size_t> reportSteps(const RunResult& result, const std::string&
       const Column* c = find(columns, e.column);
       if (!c || from >= to) continue;
       std::size_t best = from;
+      double w = c->at(from);
       for (std::size_t i = from; i < to; ++i) {
-        const double v = c->values[i], w = c->values[best];
-        if (std::isnan(w) || (e.highest ? v > w : v < w)) best = i;
+        const double v = c->at(i);
+        if (std::isnan(w) || (e.highest ? v > w : v < w)) {
+          best = i;
+          w = v;
+        }
       }
       chosen.insert(best);
     }
@@ -248,9 +253,9 @@ std::vector<std::size_t> reportSteps(const RunResult& result, const std::string&
   return {chosen.begin(), chosen.end()};
 }
 
-std::string runReportHtml(const RunResult& result, const std::string& summaryJsonText,
-                          const std::vector<std::size_t>& kept, const WrittenOutputs& written,
-                          const VoxelStock* surface) {
+void writeRunReportHtml(std::ostream& os, const RunResult& result,
+                        const std::string& summaryJsonText, const std::vector<std::size_t>& kept,
+                        const WrittenOutputs& written, const VoxelStock* surface) {
   const Job& job = result.job;
   const UnitSystem sys = job.units;
   json data;
@@ -300,8 +305,14 @@ std::string runReportHtml(const RunResult& result, const std::string& summaryJso
   }
   data["limits"] = limits;
 
+  // The step tables go into the text where their marks are (table()).
   const std::vector<Column> columns = stepColumns(result);
-  data["series"] = table(result, columns, kept);
+  std::vector<std::pair<std::string, std::string>> tables;  // key, text
+  auto tableAt = [&](const char* key, const std::vector<std::size_t>& which) {
+    tables.emplace_back(key, table(result, columns, which));
+    data[key] = std::string("\x01") + key;  // the mark
+  };
+  tableAt("series", kept);
   data["series_steps"] = {{"kept", kept.size()},
                           {"of", result.sim.steps.size()},
                           {"all_up_to", kAllSteps},
@@ -310,7 +321,7 @@ std::string runReportHtml(const RunResult& result, const std::string& summaryJso
   if (surface) {
     std::vector<std::size_t> tableSteps;
     data["surface"] = surfaceJson(result, *surface, tableSteps);
-    data["surface_steps"] = table(result, columns, tableSteps);
+    tableAt("surface_steps", tableSteps);
     lineSteps.insert(lineSteps.end(), tableSteps.begin(), tableSteps.end());
   }
   data["source"] = sourceLines(result, lineSteps);
@@ -319,7 +330,39 @@ std::string runReportHtml(const RunResult& result, const std::string& summaryJso
   data["title"] = title;
   const std::string text = data.dump(-1, ' ', false, json::error_handler_t::replace);
   data = json();  // (its nodes are larger than its text)
-  return htmlPage(PageKind::Run, title, text);
+  // The text in pieces, each table's in place of its mark: `"key":"\u0001key"` is found once,
+  // at the top level (in a string value its quotes would be escaped).
+  struct Spliced {
+    std::size_t where, length;  // the mark's place in the text
+    const std::string* table;
+    bool operator<(const Spliced& o) const { return where < o.where; }
+  };
+  std::vector<Spliced> at;
+  for (const auto& [key, tableText] : tables) {
+    const std::string keyText = json(key).dump() + ":";
+    const std::string marked = keyText + json(std::string("\x01") + key).dump();
+    const std::size_t where = text.find(marked);
+    if (where == std::string::npos) throw Error("report: a step table's mark is missing");
+    at.push_back({where + keyText.size(), marked.size() - keyText.size(), &tableText});
+  }
+  std::sort(at.begin(), at.end());
+  std::vector<std::string_view> pieces;
+  std::size_t from = 0;
+  for (const Spliced& a : at) {
+    pieces.emplace_back(text.data() + from, a.where - from);
+    pieces.emplace_back(*a.table);
+    from = a.where + a.length;
+  }
+  pieces.emplace_back(text.data() + from, text.size() - from);
+  writeHtmlPage(os, PageKind::Run, title, pieces);
+}
+
+std::string runReportHtml(const RunResult& result, const std::string& summaryJsonText,
+                          const std::vector<std::size_t>& kept, const WrittenOutputs& written,
+                          const VoxelStock* surface) {
+  std::ostringstream os;
+  writeRunReportHtml(os, result, summaryJsonText, kept, written, surface);
+  return os.str();
 }
 
 }  // namespace engage

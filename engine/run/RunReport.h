@@ -19,6 +19,7 @@
 #include "engine/run/Summary.h"
 
 #include <cstddef>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -31,9 +32,13 @@ inline constexpr std::size_t kAllSteps = 20000;
 inline constexpr std::size_t kBuckets = 4000;
 inline constexpr std::size_t kMaxTriangles = 150000;
 
-/// The page's text. `summaryJson` is summary.json's text; `steps` the steps its plots show
-/// (reportSteps); `written` the files written (named on the page); `surface`, when given, the
-/// final stock as voxels (StockView) for the 3D view.
+/// Write the page to `os`. `summaryJson` is summary.json's text; `steps` the steps its plots
+/// show (reportSteps); `written` the files written (named on the page); `surface`, when given,
+/// the final stock as voxels (StockView) for the 3D view.
+void writeRunReportHtml(std::ostream& os, const RunResult& result, const std::string& summaryJson,
+                        const std::vector<std::size_t>& steps, const WrittenOutputs& written,
+                        const VoxelStock* surface);
+/// The same page as a string.
 std::string runReportHtml(const RunResult& result, const std::string& summaryJson,
                           const std::vector<std::size_t>& steps, const WrittenOutputs& written,
                           const VoxelStock* surface);

@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <sstream>
 #include <string>
 
 using namespace engage;
@@ -60,4 +61,11 @@ TEST_CASE("a page holds its libraries and its data, and nothing ends a script ea
   CHECK(batch.find(reportAsset("three.min.js")) == std::string::npos);
   CHECK(count(batch, "</script>") == 3);
   CHECK_THROWS(reportAsset("missing.js"));
+  // The data in pieces (a run's step tables go in so): written in order, each escaped.
+  std::ostringstream os;
+  writeHtmlPage(os, PageKind::Batch, "batch",
+                {R"({"a": "</b>", )", R"("t": {"n": [1,2]}, )", R"("c": "</script>"})"});
+  CHECK(os.str().find(R"({"a": "<\/b>", "t": {"n": [1,2]}, "c": "<\/script>"})") !=
+        std::string::npos);
+  CHECK(count(os.str(), "</script>") == 3);
 }
