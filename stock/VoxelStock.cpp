@@ -881,16 +881,19 @@ struct VoxelStock::Impl {
   /// Removals so far: the serial number of the planes a removal makes.
   int removals = 0;
   /// The fractions' 0.5 iso-surface as last meshed, after `surfaceAt` removals: stock.vdb's
-  /// level set and stock.stl share it (meshing took 0.12 s of each on CAMotics' heart).
+  /// level set and stock.stl share it (meshing took 0.12 s of each on CAMotics' heart). Made
+  /// once when the files are written side by side (a run's outputs, on several cores).
   std::shared_ptr<const TriangleMesh> surface;
   int surfaceAt = -1;
+  std::mutex surfaceMutex;
 
-  const TriangleMesh& surfaceMesh() {
+  std::shared_ptr<const TriangleMesh> surfaceMesh() {
+    const std::lock_guard<std::mutex> lock(surfaceMutex);
     if (!surface || surfaceAt != removals) {
       surface = std::make_shared<const TriangleMesh>(isoSurface(*grid, 0.0));
       surfaceAt = removals;
     }
-    return *surface;
+    return surface;
   }
 
   Coord index(const Eigen::Vector3d& p) const {
@@ -2179,7 +2182,7 @@ FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
 
 std::vector<std::pair<Eigen::Vector3d, double>> VoxelStock::surfaceBand() const {
   const double h = impl_->h;
-  const FloatGrid::Ptr surface = surfaceLevelSet(*impl_->grid, h, 3, impl_->surfaceMesh().points);
+  const FloatGrid::Ptr surface = surfaceLevelSet(*impl_->grid, h, 3, impl_->surfaceMesh()->points);
   std::vector<std::pair<Eigen::Vector3d, double>> out;
   out.reserve(surface->activeVoxelCount());
   for (auto it = surface->cbeginValueOn(); it; ++it)
@@ -2193,7 +2196,7 @@ std::vector<std::pair<Eigen::Vector3d, double>> VoxelStock::surfaceBand() const 
 void VoxelStock::writeStockVdb(const std::string& path) const {
   const FloatGrid& grid = *impl_->grid;
   const double h = impl_->h;
-  const FloatGrid::Ptr surface = surfaceLevelSet(grid, h, 3, impl_->surfaceMesh().points);
+  const FloatGrid::Ptr surface = surfaceLevelSet(grid, h, 3, impl_->surfaceMesh()->points);
   // The partial voxels' planes (or the stock box's faces), for a run that goes on from here.
   openvdb::Vec3SGrid::Ptr planes[2];
   for (int i = 0; i < 2; ++i) {
@@ -2282,8 +2285,12 @@ FloatGrid::Ptr boxFiltered(const FloatGrid& grid, double h, int factor) {
 
 std::size_t VoxelStock::writeStl(const std::string& path, std::size_t maxTriangles) const {
   TriangleMesh coarse;
-  if (maxTriangles > 0) coarse = viewMesh(maxTriangles);
-  const TriangleMesh& mesh = maxTriangles > 0 ? coarse : impl_->surfaceMesh();
+  std::shared_ptr<const TriangleMesh> full;
+  if (maxTriangles > 0)
+    coarse = viewMesh(maxTriangles);
+  else
+    full = impl_->surfaceMesh();
+  const TriangleMesh& mesh = maxTriangles > 0 ? coarse : *full;
   engage::writeStl(mesh, path);
   return boundaryEdgeCount(mesh);
 }

@@ -11,7 +11,9 @@
 #include "stock/AtomicFile.h"
 
 #include <cstdio>
+#include <functional>
 #include <future>
+#include <optional>
 
 namespace engage {
 namespace {
@@ -76,6 +78,7 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
       which == Job::Outputs::All || (result.job.report && which != Job::Outputs::Summary);
   const std::vector<std::size_t> shown =
       plotted ? reportSteps(result, summary) : std::vector<std::size_t>();
+  std::optional<ReportSurface> surface;  // the report's 3D view
   if (which == Job::Outputs::All) {
     w.stockFiles = result.stock != nullptr;
     // gnuplot draws in its own process while the stock files are written (seconds each on a
@@ -96,7 +99,11 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
       writeTable(ps.data, &lines);
     }
     auto plots = std::async(std::launch::async, [&ps] { return writePlots(ps); });
-    w.openEdges = writeStockFiles(result, view, dir);
+    // The report's 3D view made beside the stock files.
+    std::function<void(const VoxelStock&)> view3d;
+    if (result.job.report)
+      view3d = [&](const VoxelStock& voxels) { surface = reportSurface(result, voxels); };
+    w.openEdges = writeStockFiles(result, view, dir, view3d);
     try {
       for (const std::string& f : plots.get())
         if (f.size() > 4 && f.compare(f.size() - 4, 4, ".png") == 0) w.plots.push_back(f);
@@ -111,8 +118,7 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
   // The page names the other files: it comes last.
   if (result.job.report && which != Job::Outputs::Summary) {
     writeFileAtomically((dir / "report.html").string(), [&](std::ostream& os) {
-      writeRunReportHtml(os, result, summary, shown, w,
-                         which == Job::Outputs::All ? view.voxels() : nullptr);
+      writeRunReportHtml(os, result, summary, shown, w, surface ? &*surface : nullptr);
     });
     w.report = true;
   }

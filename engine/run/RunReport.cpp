@@ -176,6 +176,16 @@ json surfaceJson(const RunResult& result, const VoxelStock& voxels,
           {"vertex_row", base64(vertexRow.data(), vertexRow.size() * sizeof(std::int32_t))}};
 }
 
+}  // namespace
+
+ReportSurface reportSurface(const RunResult& result, const VoxelStock& voxels) {
+  ReportSurface out;
+  out.json = surfaceJson(result, voxels, out.steps).dump();
+  return out;
+}
+
+namespace {
+
 /// Columns of the given steps as JSON text: step, file, line, tool, and every series (numbers
 /// as value() gives them). Written as text, where nlohmann::json's nodes for tiger's 12,400
 /// plotted steps (4.3 MB) had been the report's peak.
@@ -255,7 +265,7 @@ std::vector<std::size_t> reportSteps(const RunResult& result, const std::string&
 
 void writeRunReportHtml(std::ostream& os, const RunResult& result,
                         const std::string& summaryJsonText, const std::vector<std::size_t>& kept,
-                        const WrittenOutputs& written, const VoxelStock* surface) {
+                        const WrittenOutputs& written, const ReportSurface* surface) {
   const Job& job = result.job;
   const UnitSystem sys = job.units;
   json data;
@@ -305,24 +315,23 @@ void writeRunReportHtml(std::ostream& os, const RunResult& result,
   }
   data["limits"] = limits;
 
-  // The step tables go into the text where their marks are (table()).
+  // The step tables and the 3D view go into the text where their marks are (table()).
   const std::vector<Column> columns = stepColumns(result);
-  std::vector<std::pair<std::string, std::string>> tables;  // key, text
-  auto tableAt = [&](const char* key, const std::vector<std::size_t>& which) {
-    tables.emplace_back(key, table(result, columns, which));
+  std::vector<std::pair<std::string, std::string>> spliced;  // key, JSON text
+  auto splice = [&](const char* key, std::string text) {
+    spliced.emplace_back(key, std::move(text));
     data[key] = std::string("\x01") + key;  // the mark
   };
-  tableAt("series", kept);
+  splice("series", table(result, columns, kept));
   data["series_steps"] = {{"kept", kept.size()},
                           {"of", result.sim.steps.size()},
                           {"all_up_to", kAllSteps},
                           {"buckets", kBuckets}};
   std::vector<std::size_t> lineSteps = kept;
   if (surface) {
-    std::vector<std::size_t> tableSteps;
-    data["surface"] = surfaceJson(result, *surface, tableSteps);
-    tableAt("surface_steps", tableSteps);
-    lineSteps.insert(lineSteps.end(), tableSteps.begin(), tableSteps.end());
+    splice("surface", surface->json);
+    splice("surface_steps", table(result, columns, surface->steps));
+    lineSteps.insert(lineSteps.end(), surface->steps.begin(), surface->steps.end());
   }
   data["source"] = sourceLines(result, lineSteps);
   const std::string title = "engage " + data["command"].get<std::string>() + ": " +
@@ -330,7 +339,7 @@ void writeRunReportHtml(std::ostream& os, const RunResult& result,
   data["title"] = title;
   const std::string text = data.dump(-1, ' ', false, json::error_handler_t::replace);
   data = json();  // (its nodes are larger than its text)
-  // The text in pieces, each table's in place of its mark: `"key":"\u0001key"` is found once,
+  // The text in pieces, each spliced text in place of its mark: `"key":"\u0001key"` is found once,
   // at the top level (in a string value its quotes would be escaped).
   struct Spliced {
     std::size_t where, length;  // the mark's place in the text
@@ -338,11 +347,11 @@ void writeRunReportHtml(std::ostream& os, const RunResult& result,
     bool operator<(const Spliced& o) const { return where < o.where; }
   };
   std::vector<Spliced> at;
-  for (const auto& [key, tableText] : tables) {
+  for (const auto& [key, tableText] : spliced) {
     const std::string keyText = json(key).dump() + ":";
     const std::string marked = keyText + json(std::string("\x01") + key).dump();
     const std::size_t where = text.find(marked);
-    if (where == std::string::npos) throw Error("report: a step table's mark is missing");
+    if (where == std::string::npos) throw Error("report: the mark of '" + key + "' is missing");
     at.push_back({where + keyText.size(), marked.size() - keyText.size(), &tableText});
   }
   std::sort(at.begin(), at.end());
@@ -361,7 +370,8 @@ std::string runReportHtml(const RunResult& result, const std::string& summaryJso
                           const std::vector<std::size_t>& kept, const WrittenOutputs& written,
                           const VoxelStock* surface) {
   std::ostringstream os;
-  writeRunReportHtml(os, result, summaryJsonText, kept, written, surface);
+  const ReportSurface shown = surface ? reportSurface(result, *surface) : ReportSurface{};
+  writeRunReportHtml(os, result, summaryJsonText, kept, written, surface ? &shown : nullptr);
   return os.str();
 }
 

@@ -32,13 +32,23 @@ inline constexpr std::size_t kAllSteps = 20000;
 inline constexpr std::size_t kBuckets = 4000;
 inline constexpr std::size_t kMaxTriangles = 150000;
 
+/// The report's 3D view of the final stock, its heaviest part (the surface meshed, and the
+/// step that last cut at each vertex), made apart so that it can be made while the stock files
+/// are written.
+struct ReportSurface {
+  std::string json;                ///< the page's "surface" object, JSON text
+  std::vector<std::size_t> steps;  ///< the steps its vertices name (their table), in order
+};
+/// `voxels`: the final stock as voxels (StockView).
+ReportSurface reportSurface(const RunResult& result, const VoxelStock& voxels);
+
 /// Write the page to `os`. `summaryJson` is summary.json's text; `steps` the steps its plots
 /// show (reportSteps); `written` the files written (named on the page); `surface`, when given,
-/// the final stock as voxels (StockView) for the 3D view.
+/// the 3D view.
 void writeRunReportHtml(std::ostream& os, const RunResult& result, const std::string& summaryJson,
                         const std::vector<std::size_t>& steps, const WrittenOutputs& written,
-                        const VoxelStock* surface);
-/// The same page as a string.
+                        const ReportSurface* surface);
+/// The same page as a string, its 3D view of `surface` (the final stock as voxels) when given.
 std::string runReportHtml(const RunResult& result, const std::string& summaryJson,
                           const std::vector<std::size_t>& steps, const WrittenOutputs& written,
                           const VoxelStock* surface);

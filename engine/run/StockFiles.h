@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <memory>
 
 namespace engage {
@@ -33,10 +34,13 @@ class StockView {
   mutable std::unique_ptr<VoxelStock> converted_;
 };
 
-/// Write the three files into `dir`; returns the open edges of stock.stl (0: closed). Nothing
-/// is written without a stock. Throws Error naming a file that cannot be written.
+/// Write the three files into `dir`, side by side on the cores there are, with
+/// `alongside(voxels)` as one more task when given (the report's 3D view); returns the open
+/// edges of stock.stl (0: closed). Nothing is written without a stock. Throws Error naming a
+/// file that cannot be written.
 std::size_t writeStockFiles(const RunResult& result, const StockView& view,
-                            const std::filesystem::path& dir);
+                            const std::filesystem::path& dir,
+                            const std::function<void(const VoxelStock&)>& alongside = {});
 
 /// Write stock.vdb alone into `dir` (a batch job whose stock a later job takes, with outputs
 /// other than all). Nothing is written without a stock.
