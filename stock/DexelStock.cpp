@@ -4,6 +4,9 @@
 #include "cutters/Geometry.h"
 #include "stock/TriangleMesh.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,6 +21,10 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kZTolerance = 1e-4;
 /// Angular bins of the engagement arc.
 constexpr int kAngleBins = 256;
+/// A step's box of at least this many columns has its rows removed side by side where there
+/// are cores (fewer: one after another, a thread's start costing more than it saves); a step
+/// that keeps its height (a closed form per column) needs more.
+constexpr long kParallelColumns = 40, kParallelFlatColumns = 256;
 
 using Interval = DexelStock::Interval;
 using Intervals = std::vector<Interval>;
@@ -856,15 +863,19 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
   const Eigen::Vector2d u = path.feedDirectionAtEnd();
   const Eigen::Vector2d n(-u.y(), u.x());
 
-  Removal out;
-  double zMin = 1e300, zMax = -1e300, sMin = 1e300, sMax = -1e300;
+  // Each row of columns apart (its sums, its cuts, the loss columns it starts), the rows then
+  // taken in order: the same sums whatever the thread count.
   struct Cut {
     Eigen::Vector2d xy;
     double z0, z1;
   };
-  std::vector<Cut> cuts;
-  std::vector<Interval> solid;
-  for (int j = j0; j <= j1; ++j)
+  struct Row {
+    double volume = 0.0, lateral = 0.0, sMin = 1e300, sMax = -1e300;
+    long changed = 0, visited = 0;
+    std::vector<Cut> cuts;  // (rows side by side; one after another, into the step's)
+    std::vector<std::pair<std::size_t, LostColumn>> started;  // (ray, its losses) new here
+  };
+  auto removeRow = [&](int j, Row& row, std::vector<Cut>& rowCuts, std::vector<Interval>& solid) {
     for (int i = i0; i <= i1; ++i) {
       Intervals& ray = rays_[index(i, j)];
       if (ray.empty()) continue;
@@ -874,12 +885,12 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
       if (flat) {
         if (!steadySolid(path, cutter, q, h_, ray.back().z1, solid)) continue;
       } else if (!pieces.empty()) {
-        ++out.voxelsVisited;
+        ++row.visited;
         for (const StepPath& piece : pieces)
           rampSolid(piece, cutter, q, h_, ray.back().z1, solid);
         if (solid.empty()) continue;
       } else {
-        ++out.voxelsVisited;
+        ++row.visited;
         const double lo = std::max(sb.min.z(), ray.front().z0) - kZTolerance;
         const double hi = std::min(sb.max.z(), ray.back().z1) + kZTolerance;
         if (!(hi > lo)) continue;
@@ -912,11 +923,12 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
         if (inside) solid.push_back({entry, hi, 1.0});
       }
       double removed = 0.0;
+      LostColumn* column = nullptr;  // this ray's losses, found or started on its first loss
       for (const Interval& sx : solid) {
         // What of the ray in [z0, z1] loses material; remember where, for the engagement.
         for (const Interval& x : ray)
           if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f + kSameShare)
-            cuts.push_back({q, std::max(x.z0, sx.z0), std::min(x.z1, sx.z1)});
+            rowCuts.push_back({q, std::max(x.z0, sx.z0), std::min(x.z1, sx.z1)});
         // The capture: what each of the ray's intervals the piece cuts loses, as cut() takes
         // it, summed into the column's cells of voxel height, with the first step to take some
         // (so that removed.vdb holds the removed volume, and in its place). A log of one entry
@@ -930,17 +942,20 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
         // 0.1 of share (heart -0.14 %, bear 452 MB), were tried first.
         const double keep = 1.0 - sx.f;
         if (capture_) {
-          std::uint32_t& at = lostIndex_[index(i, j)];
-          if (at == kNoColumn) {
-            at = static_cast<std::uint32_t>(lost_.size());
-            lost_.emplace_back();
-          }
-          LostColumn& column = lost_[at];
           for (const Interval& x : ray)
             if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > keep + kSameShare) {
+              if (!column) {
+                const std::uint32_t at = lostIndex_[index(i, j)];
+                if (at != kNoColumn) {
+                  column = &lost_[at];
+                } else {
+                  row.started.emplace_back(index(i, j), LostColumn{});
+                  column = &row.started.back().second;
+                }
+              }
               const double share = (x.f - keep) * weight_[index(i, j)];
               voxelHeights(h_, std::max(x.z0, sx.z0), std::min(x.z1, sx.z1), [&](int k, double z) {
-                Lost& cell = lostCell(column, k);
+                Lost& cell = lostCell(*column, k);
                 cell.share += static_cast<float>(z * share);
                 if (cell.step < 0) cell.step = step;
               });
@@ -951,13 +966,54 @@ Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
       if (removed <= 0.0) continue;
       const double w = weight_[index(i, j)];
       const double volume = removed * w * h_ * h_;
-      out.volume += volume;
-      ++out.voxelsChanged;
+      row.volume += volume;
+      ++row.changed;
       const double side = (q - end.head<2>()).dot(n);
-      out.lateral += volume * side;
-      sMin = std::min(sMin, side - 0.5 * h_);
-      sMax = std::max(sMax, side + 0.5 * h_);
+      row.lateral += volume * side;
+      row.sMin = std::min(row.sMin, side - 0.5 * h_);
+      row.sMax = std::max(row.sMax, side + 0.5 * h_);
     }
+  };
+  Removal out;
+  double zMin = 1e300, zMax = -1e300, sMin = 1e300, sMax = -1e300;
+  std::vector<Cut> cuts;
+  auto take = [&](Row& row) {
+    out.volume += row.volume;
+    out.lateral += row.lateral;
+    out.voxelsChanged += row.changed;
+    out.voxelsVisited += row.visited;
+    sMin = std::min(sMin, row.sMin);
+    sMax = std::max(sMax, row.sMax);
+    cuts.insert(cuts.end(), row.cuts.begin(), row.cuts.end());  // (empty one after another)
+    for (auto& [ray, column] : row.started) {
+      lostIndex_[ray] = static_cast<std::uint32_t>(lost_.size());
+      lost_.push_back(std::move(column));
+    }
+  };
+  const int rows = j1 - j0 + 1;
+  const long columns = static_cast<long>(std::max(rows, 0)) * std::max(i1 - i0 + 1, 0);
+  if (rows > 1 && columns >= (flat ? kParallelFlatColumns : kParallelColumns) &&
+      tbb::this_task_arena::max_concurrency() > 1) {
+    // Rows side by side. A ray's started losses stay in its row until the rows are taken, so
+    // that lost_ does not grow (and move) under another row's writes.
+    std::vector<Row> parts(static_cast<std::size_t>(rows));
+    tbb::parallel_for(tbb::blocked_range<int>(j0, j1 + 1), [&](const tbb::blocked_range<int>& r) {
+      std::vector<Interval> solid;
+      for (int j = r.begin(); j != r.end(); ++j) {
+        Row& row = parts[static_cast<std::size_t>(j - j0)];
+        removeRow(j, row, row.cuts, solid);
+      }
+    });
+    for (Row& row : parts)
+      take(row);
+  } else {
+    std::vector<Interval> solid;
+    for (int j = j0; j <= j1; ++j) {
+      Row row;
+      removeRow(j, row, cuts, solid);
+      take(row);
+    }
+  }
   if (out.voxelsChanged > 0) {
     for (const Cut& c : cuts) {
       zMin = std::min(zMin, c.z0 - end.z());

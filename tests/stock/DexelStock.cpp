@@ -17,10 +17,10 @@
 #include "stock/VoxelStock.h"
 #include "tests/stock/StockTestSupport.h"
 
+#include <tbb/task_arena.h>
 #include <catch2/catch.hpp>
 
 #include <algorithm>
-
 #include <cmath>
 #include <vector>
 
@@ -231,4 +231,44 @@ TEST_CASE("dexel: the captured removal puts each step's material where it was", 
   INFO("removed " << logged << " mm^3; the most a cell lost beyond its column's material "
                   << beyond);
   CHECK(beyond < 1e-6);
+}
+
+TEST_CASE("dexel: every step and its captured losses the same at any thread count", "[stock]") {
+  // A step's rows of rays go side by side on several cores when its box is large enough (a
+  // ramp's 40 columns, a level step's 256): a 6 mm ball ramping down and across at 0.3 mm
+  // (about 20 x 22 columns a step) and a 10 mm flat end mill's level pass (about 35 x 36).
+  // Each row's sums are taken in row order, so that one thread and two give the same bits.
+  const AptCutter ball = AptCutter::ball(6.0, 18.0), flat = AptCutter::flat(10.0, 18.0);
+  auto removeAll = [&] {
+    DexelStock s = DexelStock::box(block(20.0, 6.0), 0.3);
+    s.captureRemoved(true);
+    std::vector<double> steps;
+    for (int k = 0; k < 24; ++k) {
+      const Eigen::Vector3d p0(-15.0 + 1.2 * k, -4.0 + 0.35 * k, -0.1 * k);
+      steps.push_back(
+          s.remove(Sweep(ball, line(p0, p0 + Eigen::Vector3d(1.2, 0.35, -0.1)), 0.3)).volume);
+    }
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3d p0(-14.0 + 3.5 * k, 6.0, -1.0);
+      steps.push_back(
+          s.remove(Sweep(flat, line(p0, p0 + Eigen::Vector3d(3.5, 0.0, 0.0)), 0.3)).volume);
+    }
+    std::vector<float> lost;
+    for (int j = 0; j < s.raysY(); ++j)
+      for (int i = 0; i < s.raysX(); ++i)
+        if (const DexelStock::LostColumn* c = s.removedColumn(i, j))
+          for (const DexelStock::Lost& cell : c->cells)
+            lost.push_back(cell.share + static_cast<float>(cell.step));
+    return std::make_pair(steps, lost);
+  };
+  // In an arena of one thread a removal takes its rows one after another; of two, side by side.
+  auto run = [&](int threads) {
+    return tbb::task_arena(threads).execute([&] { return removeAll(); });
+  };
+  const auto one = run(1);
+  const auto two = run(2);
+  CHECK(one.first == two.first);  // bit for bit
+  CHECK(one.second == two.second);
+  // (Cuts were made: not a comparison of nothing.)
+  CHECK(*std::min_element(one.first.begin(), one.first.end()) > 0.1);
 }
