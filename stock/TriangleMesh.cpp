@@ -127,23 +127,37 @@ TriangleMesh readMesh(const std::string& path) {
 }
 
 std::size_t boundaryEdgeCount(const TriangleMesh& mesh) {
-  // Sort the undirected edges; a closed (watertight) mesh uses each one exactly twice.
-  std::vector<std::pair<unsigned, unsigned>> edges;
-  edges.reserve(mesh.triangles.size() * 3);
+  // A closed (watertight) mesh uses each undirected edge exactly twice. The edges bucketed by
+  // their smaller vertex (a counting sort), each vertex's few other ends then sorted and
+  // counted: sorting all 2.5 million edges of CAMotics' heart's stock.stl as pairs took 0.1 s.
+  std::size_t vertices = 0;
+  for (const auto& t : mesh.triangles)
+    for (unsigned v : t)
+      vertices = std::max<std::size_t>(vertices, std::size_t{v} + 1);
+  std::vector<std::size_t> start(vertices + 1, 0);
+  for (const auto& t : mesh.triangles)
+    for (std::size_t k = 0; k < 3; ++k)
+      ++start[std::min(t[k], t[(k + 1) % 3]) + 1u];
+  for (std::size_t v = 0; v < vertices; ++v)
+    start[v + 1] += start[v];
+  std::vector<std::uint32_t> other(start.back());
+  std::vector<std::size_t> next(start.begin(), start.end() - 1);
   for (const auto& t : mesh.triangles)
     for (std::size_t k = 0; k < 3; ++k) {
-      const unsigned a = t[k];
-      const unsigned b = t[(k + 1) % 3];
-      edges.emplace_back(std::min(a, b), std::max(a, b));
+      const unsigned a = t[k], b = t[(k + 1) % 3];
+      other[next[std::min(a, b)]++] = std::max(a, b);
     }
-  std::sort(edges.begin(), edges.end());
   std::size_t open = 0;
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j] == edges[i])
-      ++j;
-    if (j - i == 1) ++open;
-    i = j;
+  for (std::size_t v = 0; v < vertices; ++v) {
+    const auto first = other.begin() + start[v], last = other.begin() + start[v + 1];
+    std::sort(first, last);
+    for (auto i = first; i != last;) {
+      auto j = i;
+      while (j != last && *j == *i)
+        ++j;
+      if (j - i == 1) ++open;
+      i = j;
+    }
   }
   return open;
 }

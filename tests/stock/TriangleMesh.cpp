@@ -102,3 +102,25 @@ TEST_CASE("writeStl writes every triangle with its normal, where the mesh is not
   }
   std::filesystem::remove(path);
 }
+
+TEST_CASE("open edges: each edge that one triangle alone uses", "[stock]") {
+  // A tetrahedron (4 faces, 6 edges each used twice): closed. Without one face its 3 edges
+  // are open; two such tetrahedra sharing nothing: 6; a fan of three triangles on one edge
+  // (used 3 times, not open) around the same two vertices: 6 open rim edges.
+  TriangleMesh m;
+  m.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  m.triangles = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  CHECK(boundaryEdgeCount(m) == 0);
+  m.triangles.pop_back();
+  CHECK(boundaryEdgeCount(m) == 3);
+  TriangleMesh two = m;
+  for (auto p : m.points)
+    two.points.push_back({p[0] + 5.0f, p[1], p[2]});
+  for (auto t : m.triangles)
+    two.triangles.push_back({t[0] + 4, t[1] + 4, t[2] + 4});
+  CHECK(boundaryEdgeCount(two) == 6);
+  TriangleMesh fan;
+  fan.points = {{0, 0, 0}, {0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}};
+  fan.triangles = {{0, 1, 2}, {0, 1, 3}, {0, 1, 4}};
+  CHECK(boundaryEdgeCount(fan) == 6);
+}
