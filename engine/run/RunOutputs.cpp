@@ -10,6 +10,8 @@
 #include "engine/units/Quantity.h"
 #include "stock/AtomicFile.h"
 
+#include <malloc.h>
+
 #include <cstdio>
 #include <functional>
 #include <future>
@@ -112,6 +114,10 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
     }
     for (const std::string& data : {ps.data, ps.topData})
       if (data != "steps.csv") std::filesystem::remove(dir / data);
+    // What the stock files' tasks freed goes back to the system before the report grows the
+    // main thread's heap (it sat in the worker threads' malloc arenas): CAMotics' tiger's peak
+    // on 2 cores 81.7 -> 77.2 MB, on one 75.8 -> 74.8 MB.
+    malloc_trim(0);
   } else if (result.job.keepStock) {
     writeStockVdb(view, dir);
   }
