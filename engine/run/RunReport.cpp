@@ -3,7 +3,6 @@
 #include "cutters/Error.h"
 #include "engine/report/HtmlPage.h"
 #include "engine/report/SurfaceSteps.h"
-#include "engine/run/Output.h"
 #include "engine/run/StepsTable.h"
 #include "engine/units/Quantity.h"
 #include "stock/VoxelStock.h"
@@ -317,20 +316,23 @@ void writeRunReportHtml(std::ostream& os, const RunResult& result,
 
   // The step tables and the 3D view go into the text where their marks are (table()).
   const std::vector<Column> columns = stepColumns(result);
-  std::vector<std::pair<std::string, std::string>> spliced;  // key, JSON text
-  auto splice = [&](const char* key, std::string text) {
-    spliced.emplace_back(key, std::move(text));
+  std::vector<std::pair<std::string, std::string_view>> spliced;  // key, JSON text (not copied)
+  auto splice = [&](const char* key, std::string_view text) {
+    spliced.emplace_back(key, text);
     data[key] = std::string("\x01") + key;  // the mark
   };
-  splice("series", table(result, columns, kept));
+  const std::string series = table(result, columns, kept);
+  splice("series", series);
   data["series_steps"] = {{"kept", kept.size()},
                           {"of", result.sim.steps.size()},
                           {"all_up_to", kAllSteps},
                           {"buckets", kBuckets}};
   std::vector<std::size_t> lineSteps = kept;
+  std::string surfaceSteps;
   if (surface) {
+    surfaceSteps = table(result, columns, surface->steps);
     splice("surface", surface->json);
-    splice("surface_steps", table(result, columns, surface->steps));
+    splice("surface_steps", surfaceSteps);
     lineSteps.insert(lineSteps.end(), surface->steps.begin(), surface->steps.end());
   }
   data["source"] = sourceLines(result, lineSteps);
@@ -343,23 +345,23 @@ void writeRunReportHtml(std::ostream& os, const RunResult& result,
   // at the top level (in a string value its quotes would be escaped).
   struct Spliced {
     std::size_t where, length;  // the mark's place in the text
-    const std::string* table;
+    std::string_view text;      // what goes there
     bool operator<(const Spliced& o) const { return where < o.where; }
   };
   std::vector<Spliced> at;
-  for (const auto& [key, tableText] : spliced) {
+  for (const auto& [key, piece] : spliced) {
     const std::string keyText = json(key).dump() + ":";
     const std::string marked = keyText + json(std::string("\x01") + key).dump();
     const std::size_t where = text.find(marked);
     if (where == std::string::npos) throw Error("report: the mark of '" + key + "' is missing");
-    at.push_back({where + keyText.size(), marked.size() - keyText.size(), &tableText});
+    at.push_back({where + keyText.size(), marked.size() - keyText.size(), piece});
   }
   std::sort(at.begin(), at.end());
   std::vector<std::string_view> pieces;
   std::size_t from = 0;
   for (const Spliced& a : at) {
     pieces.emplace_back(text.data() + from, a.where - from);
-    pieces.emplace_back(*a.table);
+    pieces.push_back(a.text);
     from = a.where + a.length;
   }
   pieces.emplace_back(text.data() + from, text.size() - from);

@@ -33,7 +33,7 @@ std::size_t writeStockFiles(const RunResult& result, const StockView& view,
   try {
     shown = view.voxels();  // (a dexel stock converted while its removed.vdb is written)
   } catch (...) {
-    tasks.wait();  // (its exception, if any, is this one's)
+    tasks.wait();  // (removed.vdb's own failure, if it failed too, is the one thrown)
     throw;
   }
   if (!shown) {
