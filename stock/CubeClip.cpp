@@ -258,7 +258,7 @@ class Polyhedron {
   }
 
  private:
-  static constexpr int kMaxFaces = 6 + 8, kMaxVertices = 4 + 8 + 2;
+  static constexpr int kMaxFaces = 6 + 9, kMaxVertices = 4 + 9 + 2;
   int faces_ = 0;
   int size_[kMaxFaces] = {};
   Eigen::Vector3d v_[kMaxFaces][kMaxVertices];
@@ -269,7 +269,7 @@ class Polyhedron {
 double cubeFraction(const HalfSpace* planes, int count, Eigen::Vector3d* centroid) {
   // Planes that keep the whole cube are dropped, one that keeps none ends the search: most
   // calls then clip against one plane or none.
-  std::array<HalfSpace, 8> active;
+  std::array<HalfSpace, 9> active;
   int n = 0;
   for (int k = 0; k < count; ++k) {
     const HalfSpace& p = planes[k];

@@ -19,7 +19,7 @@ struct HalfSpace {
   HalfSpace complement() const { return {-n, -a}; }
 };
 
-/// Fraction of the unit cube inside all `count` (at most 8) half-spaces; with `centroid`,
+/// Fraction of the unit cube inside all `count` (at most 9) half-spaces; with `centroid`,
 /// also the centroid of that part (the cube's centre, 0, when it is the whole cube or none).
 double cubeFraction(const HalfSpace* planes, int count, Eigen::Vector3d* centroid = nullptr);
 

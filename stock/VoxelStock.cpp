@@ -8,11 +8,11 @@
 // ball's first plunge step and 0.7 % of the finishing raster at 0.2 mm). A partial voxel keeps
 // the one or two planes that bound its material, and a new cut is clipped against them
 // (CubeClip.h) instead of the fraction rule min(fraction, 1 - cut), which was 0.8 % off per
-// step on a side cut and 1.5 % on arcs; keeping planes costs 48 bytes per partial voxel (the
-// example batch 1.1-1.4x the memory, the raster's grid 2x, its loop 1.5-2x slower).
-// Tried against the fraction rule and dropped: a plane reconstructed from the neighbours'
-// fractions (+0.5 % mean on slots), a 4^3 occupancy lattice per partial voxel (lattice and
-// fraction disagree by up to an eighth of a voxel along a wall), the minimum per octant (a
+// step on a side cut and 1.5 % on arcs; keeping planes costs 48 bytes per partial voxel (68 with
+// the outer plane below; the example batch 1.1-1.4x the memory, the raster's grid 2x, its
+// loop 1.5-2x slower). Tried against the fraction rule and dropped: a plane reconstructed from the
+// neighbours' fractions (+0.5 % mean on slots), a 4^3 occupancy lattice per partial voxel (lattice
+// and fraction disagree by up to an eighth of a voxel along a wall), the minimum per octant (a
 // re-cut floor ratchets down).
 // Near a flat bottom's rim on steps that change height the voxel samples 4^3 sub-cubes, each
 // cutting the stored material sub-cube by sub-cube: one plane gave 1.85 % on a 5 deg ramp and
@@ -39,11 +39,26 @@
 // normal then bounds the whole step: +14.6 %), and excluding the last step's swept solid from
 // the sub-cubes' cut (+15 %; a 5 deg ramp then -0.18 %: each step had been taking what the
 // last one's sub-cubes left).
-// Remaining thin-cut errors come from a partial voxel's two planes: what a flat bottom's rim
-// leaves of a face (face, floor and wall) needs three. Clipping such a wedge exactly instead of
-// dropping the stored plane nearly parallel to its floor (remaining()) mended the first 0.05 mm
-// peck into the top face (-5.8 % to +0.1 %) but, the rest kept as two planes, made the next
-// peck -5.5 % and 0.01 mm skims and floor re-cuts -25 % and -15 %.
+// What a flat bottom's rim leaves of a face (face, floor and wall) needs three planes: a voxel
+// whose material is inside either of two planes (floor or wall) may also be bounded by an
+// outer one (the face). With two planes the first 0.05 mm peck into a top face took -5.8 %
+// (clipping the wedge exactly but keeping two planes mended it and made the next peck -5.5 %,
+// skims -25 %); with three every peck takes +0.1 %, a 0.01 mm skim of the top face -0.1 %
+// (was -4.2 %), a floor re-cut 0.02 mm deeper -0.05 % (was -1.9 %). Two rules went with it,
+// both measured on data/gcode/thin at D/20: a wedge nested in the last step's cut keeps its
+// own corner within the other plane (one plane leaving its share, at 45 deg, cut a wall that
+// a side skim grazed above the rim: +1.7 %), and a corner cut again by the same pass takes the
+// fraction down to the cut's rest where the planes already hold it (the first step of a pass
+// across a corner stores the nearest pair, which can claim more than was cut; the fraction
+// then never followed: a slot's floor re-cut -1.9 %). Tried for the ramps' remaining +-1.4 %
+// (the rim's outer polyhedron takes a little more than the solid, and the nested floor steps
+// carry the excess by the ratio of the planes' shares): the smaller of fraction and planes,
+// and the planes' change subtracted instead of scaled; neither helped (+1.16 / +1.33 % on the
+// 0.2 mm ramp, and the smaller one made the 0.05 mm ramp +1.0 % and D/10's worst 12 %).
+// The third plane costs the flat end mills' 3D contours 16-18 % of the voxel loop (CAMotics'
+// tiger 8.1 -> 9.6 s, flower_mold 8.9 -> 10.1 s; the ball raster +1 %): mostly the rim's old
+// floor kept and clipped instead of dropped. Offering the rarer pairs only when no pair was
+// within 1e-4 of the share left did not measurably help (tiger 9.6 s).
 
 #include "stock/VoxelStock.h"
 
@@ -200,10 +215,12 @@ struct LeafResult {
 /// The material of a partial voxel, as far as planes tell: the unit cube (voxel sizes about
 /// its centre) inside two half-spaces, stored as floats, each with the serial number of the
 /// removal that made it (kStockFace for the stock's own faces). A voxel whose boundary is
-/// one plane has the keep-all half-space second.
+/// one plane has the keep-all half-space second. Where the material is inside either plane
+/// (`united`), it may also have to be inside a third, `outer` (the face a floor and wall were
+/// cut into: a thin cut's rim leaves face, floor and wall in one voxel); else outer keeps all.
 struct VoxelPlanes {
-  std::array<float, 8> v{};  // n0, a0, n1, a1
-  std::array<int, 2> made{};
+  std::array<float, 12> v{};  // n0, a0, n1, a1, outer's n, a
+  std::array<int, 3> made{};
   /// The cube's share inside both, or NaN until needed (kept to save clipping it again).
   float held = std::numeric_limits<float>::quiet_NaN();
   /// The material is inside either plane (the inside corner a flat bottom's rim leaves,
@@ -237,22 +254,29 @@ struct LeafPlanes {
     slot[offset] = 0;
   }
 
-  int get(openvdb::Index offset, HalfSpace out[2], int made[2], double& held, bool& united) const {
+  int get(openvdb::Index offset, HalfSpace out[2], int made[2], double& held, bool& united,
+          HalfSpace* outer = nullptr, int* madeOuter = nullptr) const {
     if (slot.empty()) return 0;
     const std::uint16_t k = slot[offset];
     if (k == 0) return 0;
     const VoxelPlanes& p = planes[k - 1u];
+    auto plane = [&](std::size_t i) {
+      return HalfSpace{Eigen::Vector3d(p.v[4 * i], p.v[4 * i + 1], p.v[4 * i + 2]), p.v[4 * i + 3]};
+    };
     for (std::size_t i = 0; i < 2; ++i) {
-      out[i] =
-          HalfSpace{Eigen::Vector3d(p.v[4 * i], p.v[4 * i + 1], p.v[4 * i + 2]), p.v[4 * i + 3]};
+      out[i] = plane(i);
       made[i] = p.made[i];
     }
     held = static_cast<double>(p.held);
     united = p.united;
+    if (outer) *outer = plane(2);
+    if (madeOuter) *madeOuter = p.made[2];
     return 2;
   }
+  /// `outer` only with `united` (else it keeps all).
   void set(openvdb::Index offset, const HalfSpace& first, int madeFirst, const HalfSpace& second,
-           int madeSecond, double held, bool united = false) {
+           int madeSecond, double held, bool united = false, const HalfSpace& outer = HalfSpace{},
+           int madeOuter = kStockFace) {
     if (slot.empty()) slot.assign(Leaf::SIZE, 0);
     if (slot[offset] == 0) {
       if (unused.empty()) {
@@ -264,13 +288,13 @@ struct LeafPlanes {
       }
     }
     VoxelPlanes& p = planes[slot[offset] - 1u];
-    const HalfSpace* both[2] = {&first, &second};
-    for (std::size_t i = 0; i < 2; ++i) {
+    const HalfSpace* all[3] = {&first, &second, &outer};
+    for (std::size_t i = 0; i < 3; ++i) {
       for (std::size_t j = 0; j < 3; ++j)
-        p.v[4 * i + j] = static_cast<float>(both[i]->n[static_cast<Eigen::Index>(j)]);
-      p.v[4 * i + 3] = static_cast<float>(both[i]->a);
+        p.v[4 * i + j] = static_cast<float>(all[i]->n[static_cast<Eigen::Index>(j)]);
+      p.v[4 * i + 3] = static_cast<float>(all[i]->a);
     }
-    p.made = {madeFirst, madeSecond};
+    p.made = {madeFirst, madeSecond, madeOuter};
     p.held = static_cast<float>(held);
     p.united = united;
   }
@@ -328,14 +352,16 @@ HalfSpace planeLeaving(const Eigen::Vector3d& n, double share) {
 }
 
 /// Share of the cube inside the material of planes q (inside both, or with `united` inside
-/// either) and inside all of `extra`; with `centroid`, that part's centroid.
+/// either, and inside `outer` if given) and inside all of `extra`; with `centroid`, that
+/// part's centroid.
 double materialShare(const HalfSpace q[2], bool united, const HalfSpace* extra, int count,
-                     Eigen::Vector3d* centroid = nullptr) {
-  std::array<HalfSpace, 8> all;        // (count <= 6)
-  auto with = [&](int from, int to) {  // q[from .. to) and the extra planes
+                     Eigen::Vector3d* centroid = nullptr, const HalfSpace* outer = nullptr) {
+  std::array<HalfSpace, 9> all;        // (count <= 6)
+  auto with = [&](int from, int to) {  // q[from .. to), outer and the extra planes
     int n = 0;
     for (int i = from; i < to; ++i)
       all[static_cast<std::size_t>(n++)] = q[i];
+    if (outer && outer->n.squaredNorm() > 0.0) all[static_cast<std::size_t>(n++)] = *outer;
     for (int k = 0; k < count; ++k)
       all[static_cast<std::size_t>(n++)] = extra[k];
     return n;
@@ -354,20 +380,25 @@ double materialShare(const HalfSpace q[2], bool united, const HalfSpace* extra, 
 }
 
 /// Of the pairs of planes offered (each with the serial of the removal that made each plane,
-/// and whether the material is inside both or inside either), the one whose material's share
-/// of the cube is nearest `left`, what a cut left; the first offered wins a tie.
+/// and whether the material is inside both or inside either, then also inside `outer`), the
+/// one whose material's share of the cube is nearest `left`, what a cut left; the first
+/// offered wins a tie.
 class NearestPair {
  public:
   explicit NearestPair(double left) : left_(left) {}
-  void offer(const HalfSpace& a, int madeA, const HalfSpace& b, int madeB, bool united) {
+  void offer(const HalfSpace& a, int madeA, const HalfSpace& b, int madeB, bool united,
+             const HalfSpace& outer = HalfSpace{}, int madeOuter = kStockFace) {
     const HalfSpace pair[2] = {a, b};
-    const double share = united ? materialShare(pair, true, nullptr, 0) : cubeFraction(pair, 2);
+    const double share =
+        united ? materialShare(pair, true, nullptr, 0, nullptr, &outer) : cubeFraction(pair, 2);
     if (share_ < 0.0 || std::abs(share - left_) < std::abs(share_ - left_)) {
       q_[0] = a;
       q_[1] = b;
       made_[0] = madeA;
       made_[1] = madeB;
       united_ = united;
+      outer_ = united ? outer : HalfSpace{};
+      madeOuter_ = madeOuter;
       share_ = share;
     }
   }
@@ -375,7 +406,7 @@ class NearestPair {
   bool any() const { return share_ >= 0.0; }
   /// Stores the chosen pair as the voxel's planes.
   void store(LeafPlanes& planes, openvdb::Index offset) const {
-    planes.set(offset, q_[0], made_[0], q_[1], made_[1], share_, united_);
+    planes.set(offset, q_[0], made_[0], q_[1], made_[1], share_, united_, outer_, madeOuter_);
   }
 
  private:
@@ -383,54 +414,92 @@ class NearestPair {
   HalfSpace q_[2];
   int made_[2] = {0, 0};
   bool united_ = false;
+  HalfSpace outer_;
+  int madeOuter_ = kStockFace;
   double share_ = -1.0;
 };
 
 /// Stores as the voxel's planes what the cut (inside `faces` half-spaces, taking `cutShare`)
-/// leaves of a voxel it alone bounds: a wedge's floor-or-wall corner exactly, else the one
-/// plane kept() gives.
+/// leaves of a voxel it alone bounds, within `outer` (keep-all: the whole voxel): a wedge's
+/// floor-or-wall corner exactly, else the one plane kept() gives.
 template <typename Kept>
 void keepRestOfCut(LeafPlanes& planes, openvdb::Index offset, const HalfSpace cut[2], int faces,
-                   Kept&& kept, int serial, double cutShare) {
-  if (faces == 2)
-    planes.set(offset, cut[0].complement(), serial, cut[1].complement(), serial, 1.0 - cutShare,
-               true);
-  else
+                   Kept&& kept, int serial, double cutShare, const HalfSpace& outer = HalfSpace{},
+                   int madeOuter = kStockFace) {
+  const bool bounded = outer.n.squaredNorm() > 0.0;
+  if (faces == 2) {
+    const HalfSpace rest[2] = {cut[0].complement(), cut[1].complement()};
+    const double share =
+        bounded ? materialShare(rest, true, nullptr, 0, nullptr, &outer) : 1.0 - cutShare;
+    planes.set(offset, rest[0], serial, rest[1], serial, share, true, outer, madeOuter);
+  } else if (!bounded) {
     planes.set(offset, kept(), serial, HalfSpace{}, kStockFace, 1.0 - cutShare);
+  } else {
+    const HalfSpace both[2] = {outer, kept()};
+    planes.set(offset, outer, madeOuter, kept(), serial, cubeFraction(both, 2));
+  }
 }
 
-/// remaining() for a voxel whose material is inside either of its planes q (an inside
-/// corner: the floor and wall a flat bottom's rim left), held its share of the cube.
+/// A partial voxel's material as its planes tell: inside both planes q (or with `united`
+/// inside either, and inside `outer`), which hold the share `held` of the cube (NaN until
+/// clipped).
+struct StoredMaterial {
+  HalfSpace q[2];
+  int made[2] = {kStockFace, kStockFace};
+  double held = std::numeric_limits<double>::quiet_NaN();
+  bool united = false;
+  HalfSpace outer;
+  int madeOuter = kStockFace;
+};
+
+/// remaining() for a voxel whose material m is inside either of its planes (an inside
+/// corner: the floor and wall a flat bottom's rim left), within its outer plane.
 template <typename Kept>
 double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double before,
-                 LeafPlanes& planes, openvdb::Index offset, int serial, const HalfSpace q[2],
-                 int made[2], double held, const HalfSpace cut[2], int faces, double cutShare,
-                 Kept&& kept) {
-  if (std::isnan(held)) held = materialShare(q, true, nullptr, 0);
+                 LeafPlanes& planes, openvdb::Index offset, int serial, StoredMaterial& m,
+                 const HalfSpace cut[2], int faces, double cutShare, Kept&& kept) {
+  const HalfSpace* q = m.q;
+  int* made = m.made;
+  double& held = m.held;
+  if (std::isnan(held)) held = materialShare(q, true, nullptr, 0, nullptr, &m.outer);
   if (!(held > 0.0 && std::abs(held - before) <= kPlanesAgree))
     return std::min(before, 1.0 - cutShare);
   if (made[0] >= serial - 1 || made[1] >= serial - 1) {
     // The same pass's next step: nested, as for one plane (see remaining()).
-    if (1.0 - cutShare >= held - kNoise) {
-      made[0] = made[1] = serial;
-      planes.set(offset, q[0], made[0], q[1], made[1], held, true);
-      return before;
+    double restShare = 1.0 - cutShare;
+    if (m.outer.n.squaredNorm() > 0.0) {
+      const HalfSpace rest[2] = {cut[0].complement(), cut[1].complement()};
+      const HalfSpace restOne[2] = {m.outer, kept()};
+      restShare = faces == 2 ? materialShare(rest, true, nullptr, 0, nullptr, &m.outer)
+                             : cubeFraction(restOne, 2);
     }
-    keepRestOfCut(planes, offset, cut, faces, kept, serial, cutShare);
-    return before * (1.0 - cutShare) / held;
+    if (restShare >= held - kNoise) {
+      made[0] = made[1] = serial;
+      planes.set(offset, q[0], made[0], q[1], made[1], held, true, m.outer, m.madeOuter);
+      return std::min(before, restShare);
+    }
+    keepRestOfCut(planes, offset, cut, faces, kept, serial, cutShare, m.outer, m.madeOuter);
+    return before * restShare / held;
   }
   // Another pass across the corner: what the cut takes of floor or wall, exactly.
   Eigen::Vector3d centroid;
-  const double taken = materialShare(q, true, cut, faces, &centroid);
+  const double taken = materialShare(q, true, cut, faces, &centroid, &m.outer);
   if (!(taken > kNoise)) return before;
   if (sweep.signedDistance(p + h * centroid) > 0.0) return before;  // a tangent-plane gap
   const double left = held - taken;
   // What is left is floor or wall, less the cut: as the corner of one old plane and one of
-  // the cut's faces, the pair whose share is nearest.
+  // the cut's faces, the pair whose share is nearest, within the outer plane; or the cut's
+  // own corner within the outer plane or within one old plane.
   NearestPair best(left);
   for (int i = 0; i < 2; ++i)
     for (int j = 0; j < faces; ++j)
-      best.offer(q[i], made[i], cut[j].complement(), serial, true);
+      best.offer(q[i], made[i], cut[j].complement(), serial, true, m.outer, m.madeOuter);
+  if (faces == 2) {
+    best.offer(cut[0].complement(), serial, cut[1].complement(), serial, true, m.outer,
+               m.madeOuter);
+    for (int i = 0; i < 2; ++i)
+      best.offer(cut[0].complement(), serial, cut[1].complement(), serial, true, q[i], made[i]);
+  }
   best.store(planes, offset);
   return before * std::max(0.0, left) / held;
 }
@@ -443,22 +512,13 @@ HalfSpace voxelPlane(const Eigen::Vector3d& n, double distance, double h) {
   return HalfSpace{norm > 0.0 ? Eigen::Vector3d(n / norm) : Eigen::Vector3d::Zero(), -distance / h};
 }
 
-/// A partial voxel's material as its planes tell: inside both planes q (or with `united`
-/// inside either), which hold the share `held` of the cube (NaN until clipped).
-struct StoredMaterial {
-  HalfSpace q[2];
-  int made[2] = {kStockFace, kStockFace};
-  double held = std::numeric_limits<double>::quiet_NaN();
-  bool united = false;
-};
-
 /// The stored material of the voxel at p (size h) that holds `before`: its planes, or for a
 /// voxel of the stock box's shell not cut before, the box's faces. False for a voxel all
 /// material (or, from dexels, a fraction without planes).
 bool storedMaterial(const LeafPlanes& planes, openvdb::Index offset, double before, const Box3* box,
                     const Eigen::Vector3d& p, double h, StoredMaterial& m) {
   if (!(before < 1.0)) return false;
-  if (planes.get(offset, m.q, m.made, m.held, m.united) != 0) return true;
+  if (planes.get(offset, m.q, m.made, m.held, m.united, &m.outer, &m.madeOuter) != 0) return true;
   if (!box) return false;
   boxFaces(*box, p, h, m.q);
   return true;
@@ -619,24 +679,25 @@ const CornerProbe& probeCorner(const Sweep& sweep, const Coord& corner, double h
     }
     return after;
   }
-  if (std::isnan(m.held)) m.held = materialShare(m.q, m.united, nullptr, 0);
+  if (std::isnan(m.held)) m.held = materialShare(m.q, m.united, nullptr, 0, nullptr, &m.outer);
   if (!(m.held > 0.0 && std::abs(m.held - before) <= kPlanesAgree))
     return std::min(before, 1.0 - cutShare);
   double taken = 0.0;
-  if (!sampled) taken = materialShare(m.q, m.united, hull.data(), hullPlanes);
+  if (!sampled) taken = materialShare(m.q, m.united, hull.data(), hullPlanes, nullptr, &m.outer);
   for (int c = 0; c < kCount && sampled; ++c) {
-    HalfSpace local[2];  // the stored planes in sub-cube c's coordinates
-    for (int i = 0; i < 2; ++i)
-      local[i] = m.q[i].n.squaredNorm() == 0.0
-                     ? m.q[i]
-                     : HalfSpace{m.q[i].n, kSide * (m.q[i].a - m.q[i].n.dot(centre(c)))};
-    taken += materialShare(local, m.united, &sub[c], 1) / kCount;
+    auto local = [&](const HalfSpace& q) {  // a stored plane in sub-cube c's coordinates
+      return q.n.squaredNorm() == 0.0 ? q : HalfSpace{q.n, kSide * (q.a - q.n.dot(centre(c)))};
+    };
+    const HalfSpace q[2] = {local(m.q[0]), local(m.q[1])}, outer = local(m.outer);
+    taken += materialShare(q, m.united, &sub[c], 1, nullptr, &outer) / kCount;
   }
   if (!(taken > kNoise)) return before;
   const double left = std::max(0.0, m.held - taken);
   // Keep the pair of planes whose material's share is nearest what is left: an old plane and
   // the plane leaving the cut's share, an old plane and a face of a convex cut's wedge, or the
-  // wedge's own inside corner.
+  // wedge's own inside corner, alone or within an old plane (a thin cut into a face leaves
+  // face, floor and wall), or with an inside corner stored, its corner with a face of the
+  // wedge within its outer plane.
   NearestPair best(left);
   for (int i = 0; i < 2; ++i) {
     if (m.q[i].n.squaredNorm() == 0.0) continue;
@@ -644,7 +705,20 @@ const CornerProbe& probeCorner(const Sweep& sweep, const Coord& corner, double h
     for (int j = 0; j < wedge; ++j)
       best.offer(m.q[i], m.made[i], hull[static_cast<std::size_t>(j)].complement(), serial, false);
   }
-  if (wedge == 2) best.offer(hull[0].complement(), serial, hull[1].complement(), serial, true);
+  if (wedge == 2) {
+    const HalfSpace rest[2] = {hull[0].complement(), hull[1].complement()};
+    best.offer(rest[0], serial, rest[1], serial, true);
+    if (m.united) {
+      if (m.outer.n.squaredNorm() > 0.0)
+        best.offer(rest[0], serial, rest[1], serial, true, m.outer, m.madeOuter);
+      for (int i = 0; i < 2; ++i)
+        for (int j = 0; j < 2; ++j)
+          best.offer(m.q[i], m.made[i], rest[j], serial, true, m.outer, m.madeOuter);
+    }
+    for (int i = 0; i < 2 && !m.united; ++i)
+      if (m.q[i].n.squaredNorm() > 0.0)
+        best.offer(rest[0], serial, rest[1], serial, true, m.q[i], m.made[i]);
+  }
   if (best.any())
     best.store(planes, offset);
   else
@@ -720,8 +794,8 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   double& held = stored.held;
   const bool united = stored.united;
   if (united)
-    return cutCorner(sweep, p, h, before, planes, offset, serial, q, made, held, cut, faces,
-                     cutShare, kept);
+    return cutCorner(sweep, p, h, before, planes, offset, serial, stored, cut, faces, cutShare,
+                     kept);
   // The planes' share of the cube, clipped only where needed (NaN until then).
   auto heldKnown = [&] {
     if (std::isnan(held)) held = cubeFraction(q, 2);
@@ -739,10 +813,18 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
     // decided without clipping.)
     const bool deeper = 1.0 - cutShare < cubeFraction(q[i]) - kNoise;
     if (deeper && !heldKnown()) return std::min(before, 1.0 - cutShare);
-    const HalfSpace alt[2] = {q[1 - i], deeper ? kept() : HalfSpace{}};
-    const double other = deeper ? cubeFraction(alt, 2) : held;
+    // (Across a flat bottom's rim, the wedge's own rest within the other plane: one plane
+    // leaving its share cut a wall grazed above the rim at 45 deg.)
+    const HalfSpace alt[2] = {q[1 - i], deeper && faces == 1 ? kept() : HalfSpace{}};
+    const HalfSpace rest[2] = {cut[0].complement(), cut[1].complement()};
+    const double other = !deeper      ? held
+                         : faces == 1 ? cubeFraction(alt, 2)
+                                      : materialShare(rest, true, nullptr, 0, nullptr, &q[1 - i]);
     if (deeper && other < held - kNoise) {
-      planes.set(offset, q[1 - i], made[1 - i], kept(), serial, other);
+      if (faces == 1)
+        planes.set(offset, q[1 - i], made[1 - i], kept(), serial, other);
+      else
+        planes.set(offset, rest[0], serial, rest[1], serial, other, true, q[1 - i], made[1 - i]);
       return before * other / held;
     }
     made[i] = serial;
@@ -762,7 +844,7 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
       if (cubeFraction(cut[j].complement()) >= cubeFraction(q[i]) - kNoise) return before;
       if (!heldKnown()) return std::min(before, 1.0 - cutShare);
       if (cubeFraction(alt, 2) >= held - kNoise) return before;
-      m[i] = HalfSpace{};
+      if (faces == 1) m[i] = HalfSpace{};  // (a wedge's rest is kept within the plane)
       break;
     }
   }
@@ -780,12 +862,16 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   if (faces == 2) {
     // Across a flat bottom's rim: what is left is the old material less a wedge. Keep the
     // two planes whose material's share is nearest: an old plane and one face of the cut
-    // (a floor the rim ran along), or the wedge's own inside corner.
+    // (a floor the rim ran along), or the wedge's own inside corner, alone or within an old
+    // plane (a thin cut into a face leaves face, floor and wall).
     NearestPair best(left);
     best.offer(cut[0].complement(), serial, cut[1].complement(), serial, true);
     for (int i = 0; i < 2; ++i)
       for (int j = 0; j < 2 && m[i].n.squaredNorm() > 0.0; ++j)
         best.offer(m[i], made[i], cut[j].complement(), serial, false);
+    for (int i = 0; i < 2; ++i)
+      if (m[i].n.squaredNorm() > 0.0)
+        best.offer(cut[0].complement(), serial, cut[1].complement(), serial, true, m[i], made[i]);
     best.store(planes, offset);
     return before * std::max(0.0, left) / held;
   }
@@ -1238,7 +1324,7 @@ Eigen::Vector3d fractionNormal(const FloatGrid::ConstAccessor& acc, const Coord&
 /// one would), in two Vec3s grids "planes_0" and "planes_1": a plane {u : n . u <= a} (u in
 /// voxel sizes from the voxel's centre) as n (a + 2) (a lies within +-0.87 where a plane cuts
 /// the cube), none as 0, and the first as n (a + 6) when the material is inside either plane
-/// instead of both.
+/// instead of both; a third, "planes_2", holds such a voxel's outer plane (0 where it has none).
 openvdb::Vec3s encodePlane(const HalfSpace& q, bool united) {
   if (q.n.squaredNorm() == 0.0) return openvdb::Vec3s(0.0f);
   const double r = std::clamp(q.a, -1.9, 1.9) + (united ? 6.0 : 2.0);
@@ -1258,15 +1344,16 @@ HalfSpace decodePlane(const openvdb::Vec3s& v, bool* united = nullptr) {
 /// The grids of a stock.vdb that a run starts from.
 struct StockFile {
   FloatGrid::Ptr fractions;
-  /// The partial voxels' planes (both null for a file written without them).
-  openvdb::Vec3SGrid::Ptr planes[2];
+  /// The partial voxels' planes (both null for a file written without them), and their outer
+  /// planes (null for a file written before they were kept).
+  openvdb::Vec3SGrid::Ptr planes[3];
 };
 
 /// Grid "stock" of stock.vdb at `path`, checked: fractions 0 to 1 on a uniform grid whose
 /// index axes are the world's (a translation allowed); and its planes, if it has them.
 StockFile readStockGrid(const std::string& path) {
   initVdb();
-  openvdb::Vec3SGrid::Ptr planes[2];
+  openvdb::Vec3SGrid::Ptr planes[3];
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     throw Error("cannot read stock '" + path +
@@ -1280,9 +1367,10 @@ StockFile readStockGrid(const std::string& path) {
       names += (names.empty() ? "" : ", ") + it.gridName();
     if (file.hasGrid("stock")) base = file.readGrid("stock");
     if (base && file.hasGrid("planes_0") && file.hasGrid("planes_1"))
-      for (int i = 0; i < 2; ++i)
-        planes[i] =
-            openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid("planes_" + std::to_string(i)));
+      for (int i = 0; i < 3; ++i)
+        if (i < 2 || file.hasGrid("planes_2"))
+          planes[i] = openvdb::gridPtrCast<openvdb::Vec3SGrid>(
+              file.readGrid("planes_" + std::to_string(i)));
     file.close();
   } catch (const openvdb::Exception& e) {
     throw Error("cannot read stock '" + path + "' as an OpenVDB file: " + e.what());
@@ -1329,18 +1417,33 @@ StockFile readStockGrid(const std::string& path) {
   if (planes[0] && planes[1] && planes[0]->transform() == xf && planes[1]->transform() == xf) {
     f.planes[0] = planes[0];
     f.planes[1] = planes[1];
+    if (planes[2] && planes[2]->transform() == xf) f.planes[2] = planes[2];
   }
   return f;
 }
 
-/// The planes of voxel c of a stock file: from its planes grids, else (a file without them) the
-/// plane across the fractions' gradient that holds fraction m. Returns how many (0: none).
-int filePlanes(const FloatGrid::ConstAccessor& acc, const openvdb::Vec3SGrid::ConstAccessor* planes,
-               const Coord& c, double m, HalfSpace q[2], bool& united) {
+/// The accessors of a stock file's planes grids (none for a file without them; the outer
+/// planes' only where the file has them).
+std::vector<openvdb::Vec3SGrid::ConstAccessor> planeAccessors(const StockFile& file) {
+  std::vector<openvdb::Vec3SGrid::ConstAccessor> out;
+  for (int i = 0; i < 3 && file.planes[0]; ++i)
+    if (file.planes[i]) out.push_back(file.planes[i]->getConstAccessor());
+  return out;
+}
+
+/// The planes of voxel c of a stock file (`planes` its planeAccessors(), empty for none): from
+/// its planes grids, q[2] the outer plane of united ones (else keep-all), else (a file without
+/// them) the plane across the fractions' gradient that holds fraction m. Returns how many (0:
+/// none).
+int filePlanes(const FloatGrid::ConstAccessor& acc,
+               const std::vector<openvdb::Vec3SGrid::ConstAccessor>& planes, const Coord& c,
+               double m, HalfSpace q[3], bool& united) {
   united = false;
-  if (planes) {
+  q[2] = HalfSpace{};
+  if (!planes.empty()) {
     q[0] = decodePlane(planes[0].getValue(c), &united);
     q[1] = decodePlane(planes[1].getValue(c));
+    if (united && planes.size() > 2) q[2] = decodePlane(planes[2].getValue(c));
     if (q[0].n.squaredNorm() > 0.0 || q[1].n.squaredNorm() > 0.0) return 2;
   }
   const Eigen::Vector3d n = fractionNormal(acc, c);
@@ -1451,11 +1554,7 @@ FloatGrid::Ptr resampledFractions(const StockFile& file, double h) {
   // any thread count), from the old voxels that overlap it.
   tbb::parallel_for(0, dim[2], [&](int layer) {
     auto acc = grid.getConstAccessor();
-    std::vector<openvdb::Vec3SGrid::ConstAccessor> planeAcc;
-    if (file.planes[0])
-      for (int i = 0; i < 2; ++i)
-        planeAcc.push_back(file.planes[i]->getConstAccessor());
-    const openvdb::Vec3SGrid::ConstAccessor* planes = planeAcc.empty() ? nullptr : planeAcc.data();
+    const std::vector<openvdb::Vec3SGrid::ConstAccessor> planes = planeAccessors(file);
     const int z = lo[2] + layer;
     const int k0 =
         std::max(bb.min().z(), static_cast<int>(std::floor(((z - 0.5) * h - o[2]) / h0 + 0.5)));
@@ -1468,9 +1567,9 @@ FloatGrid::Ptr resampledFractions(const StockFile& file, double h) {
           const double m = static_cast<double>(acc.getValue(c));
           if (!(m > 0.0)) continue;
           const Eigen::Vector3d centre(o[0] + i * h0, o[1] + j * h0, o[2] + k * h0);
-          // A partial voxel's material: inside its planes (both, or either when united),
-          // scaled to its fraction (the planes hold it to within kPlanesAgree).
-          HalfSpace q[2];
+          // A partial voxel's material: inside its planes (both, or either when united, and
+          // its outer one), scaled to its fraction (the planes hold it to within kPlanesAgree).
+          HalfSpace q[3];
           bool united = false;
           const int count = m < 1.0 ? filePlanes(acc, planes, c, m, q, united) : 0;
           // A box's shell voxel is its box (its file planes, if any, two of a corner's three
@@ -1478,11 +1577,12 @@ FloatGrid::Ptr resampledFractions(const StockFile& file, double h) {
           double boxLo[3], boxHi[3];
           const bool boxed = m < 1.0 && shellBox(acc, c, m, boxLo, boxHi);
           auto inside = [&](const HalfSpace* clip, int clips) {
-            HalfSpace all[8];
+            HalfSpace all[9];
             auto with = [&](std::initializer_list<int> which) {
               int n = 0;
               for (int w : which)
                 all[n++] = q[w];
+              all[n++] = q[2];
               for (int t = 0; t < clips; ++t)
                 all[n++] = clip[t];
               return cubeFraction(all, n);
@@ -1569,11 +1669,7 @@ VoxelStock VoxelStock::fromVdb(const std::string& path, double h) {
   // alone, at the stock box's edges, put material above its top face, which a rapid from
   // the top then met.)
   const bool same = onGrid(*file.fractions, h);
-  std::vector<openvdb::Vec3SGrid::ConstAccessor> planeAcc;
-  if (file.planes[0])
-    for (int i = 0; i < 2; ++i)
-      planeAcc.push_back(file.planes[i]->getConstAccessor());
-  const openvdb::Vec3SGrid::ConstAccessor* planes = planeAcc.empty() ? nullptr : planeAcc.data();
+  const std::vector<openvdb::Vec3SGrid::ConstAccessor> planes = planeAccessors(file);
   const FloatGrid::ConstAccessor oldAcc = file.fractions->getConstAccessor();
   const double h0 = file.fractions->transform().voxelSize()[0];
   const openvdb::Vec3d o = file.fractions->transform().indexToWorld(openvdb::Vec3d(0.0));
@@ -1582,7 +1678,7 @@ VoxelStock VoxelStock::fromVdb(const std::string& path, double h) {
     const double m = static_cast<double>(*it);
     if (!it.isVoxelValue() || !(m < 1.0)) continue;
     const Coord c = it.getCoord();
-    HalfSpace q[2];
+    HalfSpace q[3];
     bool united = false;
     int count = 0;
     if (same) {
@@ -1606,30 +1702,29 @@ VoxelStock VoxelStock::fromVdb(const std::string& path, double h) {
           overlap *= std::max(0.0, std::min(centre[a] + 0.5 * h, oldCentre[a] + 0.5 * h0) -
                                        std::max(centre[a] - 0.5 * h, oldCentre[a] - 0.5 * h0));
         if (!(overlap > best)) continue;
-        HalfSpace oq[2];
+        HalfSpace oq[3];
         bool ou = false;
         if (filePlanes(oldAcc, planes, *oc, mo, oq, ou) == 0) continue;
         // n . (x - old centre) <= a h0, with x = centre + u h.
-        HalfSpace moved[2];
-        for (int i = 0; i < 2; ++i)
+        HalfSpace moved[3];
+        for (int i = 0; i < 3; ++i)
           moved[i] = oq[i].n.squaredNorm() == 0.0
                          ? oq[i]
                          : HalfSpace{oq[i].n, (oq[i].a * h0 - oq[i].n.dot(centre - oldCentre)) / h};
-        const double held =
-            ou ? cubeFraction(&moved[0], 1) + cubeFraction(&moved[1], 1) - cubeFraction(moved, 2)
-               : cubeFraction(moved, 2);
+        const double held = materialShare(moved, ou, nullptr, 0, nullptr, &moved[2]);
         if (!(held > 0.0 && std::abs(held - m) <= kPlanesAgree)) continue;
         best = overlap;
-        q[0] = moved[0];
-        q[1] = moved[1];
+        for (int i = 0; i < 3; ++i)
+          q[i] = moved[i];
         united = ou;
         count = 2;
       }
-      if (count == 0) count = filePlanes(acc, nullptr, c, m, q, united);
+      if (count == 0) count = filePlanes(acc, {}, c, m, q, united);
     }
     if (count == 0) continue;  // (the fraction rule for this one)
     impl->planes[leafKey(c)].set(Leaf::coordToOffset(c), q[0], kStockFace, q[1], kStockFace,
-                                 std::numeric_limits<double>::quiet_NaN(), united);
+                                 std::numeric_limits<double>::quiet_NaN(), united,
+                                 united ? q[2] : HalfSpace{});
   }
   return VoxelStock(std::move(impl));
 }
@@ -2198,8 +2293,8 @@ void VoxelStock::writeStockVdb(const std::string& path) const {
   const double h = impl_->h;
   const FloatGrid::Ptr surface = surfaceLevelSet(grid, h, 3, impl_->surfaceMesh()->points);
   // The partial voxels' planes (or the stock box's faces), for a run that goes on from here.
-  openvdb::Vec3SGrid::Ptr planes[2];
-  for (int i = 0; i < 2; ++i) {
+  openvdb::Vec3SGrid::Ptr planes[3];
+  for (int i = 0; i < 3; ++i) {
     planes[i] = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
     planes[i]->setTransform(grid.transform().copy());
     planes[i]->setName("planes_" + std::to_string(i));
@@ -2208,25 +2303,27 @@ void VoxelStock::writeStockVdb(const std::string& path) const {
   {
     auto p0 = planes[0]->getAccessor();
     auto p1 = planes[1]->getAccessor();
+    auto p2 = planes[2]->getAccessor();
     for (auto it = grid.cbeginValueOn(); it; ++it) {
       const double m = static_cast<double>(*it);
       if (!it.isVoxelValue() || !(m < 1.0)) continue;
       const Coord c = it.getCoord();
       const auto found = impl_->planes.find(leafKey(c));
-      HalfSpace q[2];
+      HalfSpace q[2], outer;
       int made[2];
       double held = 0.0;
       bool united = false;
       if (found == impl_->planes.end() ||
-          found->second.get(Leaf::coordToOffset(c), q, made, held, united) == 0) {
+          found->second.get(Leaf::coordToOffset(c), q, made, held, united, &outer) == 0) {
         if (!impl_->box) continue;
         boxFaces(*impl_->box, Eigen::Vector3d(c.x() * h, c.y() * h, c.z() * h), h, q);
       }
       p0.setValue(c, encodePlane(q[0], united));
       p1.setValue(c, encodePlane(q[1], false));
+      if (outer.n.squaredNorm() > 0.0) p2.setValue(c, encodePlane(outer, false));
     }
   }
-  writeVdb(path, openvdb::GridPtrVec{impl_->grid, surface, planes[0], planes[1]});
+  writeVdb(path, openvdb::GridPtrVec{impl_->grid, surface, planes[0], planes[1], planes[2]});
 }
 
 void VoxelStock::writeRemovedVdb(const std::string& path) const {

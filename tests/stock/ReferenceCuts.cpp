@@ -36,28 +36,23 @@ struct KnownMiss {
   double bound;
 };
 // Measured with build/tests/bench/bench_thin_cuts --moves (D/20), each bound the error rounded up.
-// The voxels: skims of the top face -4.2 and -2.7 %, a side skim -2 %, the first 0.05 mm peck
-// -5.8 %, floor re-cuts -2.2 to +1.1 %, ramps from the top face -1.3 % (0.05 mm deep) and
-// +1.3 % (0.2 mm). The dexels: none. (The retracts that took what the step before them left,
-// up to 0.042 mm^3, remove nothing since the simulation knows they cannot reach material:
+// The voxels: ramps from the top face -1.4 % (0.05 mm deep) and +1.3 % (0.2 mm), the top face's
+// skim again 0.01 mm lower where the ramps crossed it +1.4 % (walls grazed where a partial
+// voxel's planes hold neither), which leave skims_ramps' total +0.23 %; the floor re-cuts and
+// the pecks meet the bounds since a voxel keeps face, floor and wall (three planes: the
+// first 0.05 mm peck was -5.8 %, the top face's first skim -4.2 %, a floor re-cut -2.2 %). The
+// dexels: none. (The retracts that took what the step before them left, up to 0.042 mm^3,
+// remove nothing since the simulation knows they cannot reach material:
 // engine/sim/Simulation.cpp, retractsFromCut.)
 // One miss a line.
 // clang-format off
 constexpr KnownMiss kKnownMisses[] = {
-    {"voxel", "floor_recut flat", 9, 0.025},
-    {"voxel", "floor_recut flat", 29, 0.03},
-    {"voxel", "floor_recut flat", 31, 0.02},
-    {"voxel", "floor_recut flat", -1, 0.75},
-    {"voxel", "skims_ramps flat", 8, 0.06},
-    {"voxel", "skims_ramps flat", 12, 0.02},
-    {"voxel", "skims_ramps flat", 16, 0.02},
-    {"voxel", "skims_ramps flat", 24, 0.03},
-    {"voxel", "skims_ramps flat", 28, 0.035},
-    {"voxel", "skims_ramps flat", 0, 0.004},
-    {"voxel", "skims_ramps flat", -1, 0.14},
-    {"voxel", "pecks_grazes flat", 8, 0.08},
-    {"voxel", "pecks_grazes flat", 11, 0.025},
-    {"voxel", "pecks_grazes flat", -1, 0.5},
+    {"voxel", "floor_recut flat", -1, 0.84},
+    {"voxel", "skims_ramps flat", 12, 0.015},
+    {"voxel", "skims_ramps flat", 16, 0.014},
+    {"voxel", "skims_ramps flat", 28, 0.015},
+    {"voxel", "skims_ramps flat", 0, 0.003},
+    {"voxel", "skims_ramps flat", -1, 0.55},
 };
 // clang-format on
 
