@@ -50,15 +50,23 @@
 // a side skim grazed above the rim: +1.7 %), and a corner cut again by the same pass takes the
 // fraction down to the cut's rest where the planes already hold it (the first step of a pass
 // across a corner stores the nearest pair, which can claim more than was cut; the fraction
-// then never followed: a slot's floor re-cut -1.9 %). Tried for the ramps' remaining +-1.4 %
-// (the rim's outer polyhedron takes a little more than the solid, and the nested floor steps
-// carry the excess by the ratio of the planes' shares): the smaller of fraction and planes,
-// and the planes' change subtracted instead of scaled; neither helped (+1.16 / +1.33 % on the
-// 0.2 mm ramp, and the smaller one made the 0.05 mm ramp +1.0 % and D/10's worst 12 %).
-// The third plane costs the flat end mills' 3D contours 16-18 % of the voxel loop (CAMotics'
-// tiger 8.1 -> 9.6 s, flower_mold 8.9 -> 10.1 s; the ball raster +1 %): mostly the rim's old
-// floor kept and clipped instead of dropped. Offering the rarer pairs only when no pair was
-// within 1e-4 of the share left did not measurably help (tiger 9.6 s).
+// then never followed: a slot's floor re-cut -1.9 %). The ramps from a face were still -1.4 /
+// +1.3 %: their rim's wedge was the two most cutting hull planes, and corners under the flat
+// bottom give its plane two or three times, so the wedge was two floors and the rest kept no
+// wall; now the second is the more cutting (with the first) of the most cutting and the widest
+// plane at 15 deg or more to the first: +0.2 / +0.3 % (the widest alone: a total 0.13 %, the
+// best of all pairs the same as these two at six clips more per voxel). Tried before that, for
+// the ratio by which nested floor steps carry a rim step's excess: the smaller of fraction and
+// planes, and the planes' change subtracted; neither helped. A wedge across two old planes
+// may take only a sliver of them (the front of a pass entering a voxel of floor and side
+// face): keeping them as they are is offered (the nearest pair had been the two floors, the
+// face dropped and the floor never cut: the slot re-cut leaving the stock -0.9 -> -0.1 %).
+// Left: a voxel whose wall and floor the front of the next, deeper pass crosses holds four
+// planes for that step; the nearest pair drops one (the slot re-cut 0.1 mm deeper +0.6 %).
+// Cost of the third plane and the wedge: the voxel loop of flat end mills' 3D contours
+// 21-31 % longer (CAMotics' tiger 8.25 -> 10.8 s, flower_mold 9.0 -> 11.0 s, one core; the
+// ball raster +1 %), mostly the rim's old floor kept and clipped instead of dropped. Offering the
+// rarer pairs only when no pair was within 1e-4 of the share left did not measurably help.
 
 #include "stock/VoxelStock.h"
 
@@ -236,6 +244,9 @@ constexpr double kNoise = 1e-6;
 /// trusted: two planes cannot hold a third surface (a pocket wall's corner at the stock's
 /// top), and where they miss one by this much the voxel falls back to the fraction rule.
 constexpr double kPlanesAgree = 0.05;
+/// Two planes within 15 deg of each other are one surface (cos 15 deg): a cut's face this near
+/// a stored plane cuts that surface again, and a wedge needs two faces further apart.
+constexpr double kNestedCos = 0.9659258262890683;
 /// Share of a voxel a step must take for the voxel to count in the step's width and depth.
 constexpr double kEngagedShare = 0.01;
 
@@ -640,6 +651,28 @@ const CornerProbe& probeCorner(const Sweep& sweep, const Coord& corner, double h
                                      found[static_cast<std::size_t>(j - 1)].first;
              --j)
           std::swap(found[static_cast<std::size_t>(j)], found[static_cast<std::size_t>(j - 1)]);
+      // The wedge (the first two) of two faces: the most cutting plane and the most cutting
+      // one at 15 deg or more to it (corners under a flat bottom give its plane several times:
+      // a wedge of two floors kept no wall, and a ramp's front cut from the top face took
+      // +1.3 %).
+      int first = 0, widest = 0;  // the most cutting and the widest at 15 deg or more
+      double leastCos = kNestedCos;
+      for (int k = 1; k < hullPlanes; ++k) {
+        const double cos = found[static_cast<std::size_t>(k)].second.n.dot(found[0].second.n);
+        if (cos >= kNestedCos) continue;
+        if (first == 0) first = k;
+        if (cos < leastCos) leastCos = cos, widest = k;
+      }
+      int second = first;
+      if (widest != first) {
+        auto pairShare = [&](int k) {
+          const HalfSpace pair[2] = {found[0].second, found[static_cast<std::size_t>(k)].second};
+          return cubeFraction(pair, 2);
+        };
+        if (pairShare(widest) < pairShare(first)) second = widest;
+      }
+      for (int j = second; j > 1; --j)
+        std::swap(found[static_cast<std::size_t>(j)], found[static_cast<std::size_t>(j - 1)]);
       hullPlanes = std::min(hullPlanes, 6);
       for (int k = 0; k < hullPlanes; ++k)
         hull[static_cast<std::size_t>(k)] = found[static_cast<std::size_t>(k)].second;
@@ -834,7 +867,6 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   // A face of the cut within 15 deg of a stored plane is that surface cut again (a finishing
   // pass over a floor): where the stored plane bounds the material more tightly the cut
   // (inside the face) takes nothing, else the face replaces it.
-  constexpr double kNestedCos = 0.9659258262890683;  // cos 15 deg
   HalfSpace m[2] = {q[0], q[1]};
   for (int i = 0; i < 2; ++i) {
     if (q[i].n.squaredNorm() == 0.0) continue;  // the keep-all half-space
@@ -869,6 +901,7 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
     for (int i = 0; i < 2; ++i)
       for (int j = 0; j < 2 && m[i].n.squaredNorm() > 0.0; ++j)
         best.offer(m[i], made[i], cut[j].complement(), serial, false);
+    best.offer(m[0], made[0], m[1], made[1], false);
     for (int i = 0; i < 2; ++i)
       if (m[i].n.squaredNorm() > 0.0)
         best.offer(cut[0].complement(), serial, cut[1].complement(), serial, true, m[i], made[i]);
