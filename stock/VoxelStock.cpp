@@ -500,11 +500,14 @@ double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   const double left = held - taken;
   // What is left is floor or wall, less the cut: as the corner of one old plane and one of
   // the cut's faces, the pair whose share is nearest, within the outer plane; or the cut's
-  // own corner within the outer plane or within one old plane.
+  // own rest (its face, or its corner) within the outer plane, or its corner within one old
+  // plane. (Without the face alone, a wall cut back past a corner's floor and wall kept a
+  // plane it had cut away: a side skim past an earlier one's rim +0.2 %.)
   NearestPair best(left);
   for (int i = 0; i < 2; ++i)
     for (int j = 0; j < faces; ++j)
       best.offer(q[i], made[i], cut[j].complement(), serial, true, m.outer, m.madeOuter);
+  if (faces == 1) best.offer(m.outer, m.madeOuter, cut[0].complement(), serial, false);
   if (faces == 2) {
     best.offer(cut[0].complement(), serial, cut[1].complement(), serial, true, m.outer,
                m.madeOuter);
