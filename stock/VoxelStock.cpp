@@ -64,9 +64,12 @@
 // Left: a voxel whose wall and floor the front of the next, deeper pass crosses holds four
 // planes for that step; the nearest pair drops one (the slot re-cut 0.1 mm deeper +0.6 %).
 // Cost of the third plane and the wedge: the voxel loop of flat end mills' 3D contours
-// 21-31 % longer (CAMotics' tiger 8.25 -> 10.8 s, flower_mold 9.0 -> 11.0 s, one core; the
-// ball raster +1 %), mostly the rim's old floor kept and clipped instead of dropped. Offering the
-// rarer pairs only when no pair was within 1e-4 of the share left did not measurably help.
+// 16-25 % longer (CAMotics' tiger 8.14 -> 10.16 s, flower_mold 9.14 -> 10.60 s, one core; the
+// ball raster +1 %): cube clipping went from 39 to 47 % of the samples (perf), the rim's
+// candidate pairs with an outer plane and its united materials clipped with theirs. Not the
+// cause, measured: keeping the old floor under a wedge instead of dropping it (no change).
+// Offering the rarer pairs only when no pair was within 1e-4 of the share left did not
+// measurably help.
 
 #include "stock/VoxelStock.h"
 
@@ -744,9 +747,10 @@ const CornerProbe& probeCorner(const Sweep& sweep, const Coord& corner, double h
   if (wedge == 2) {
     const HalfSpace rest[2] = {hull[0].complement(), hull[1].complement()};
     best.offer(rest[0], serial, rest[1], serial, true);
-    if (m.united) {
-      if (m.outer.n.squaredNorm() > 0.0)
-        best.offer(rest[0], serial, rest[1], serial, true, m.outer, m.madeOuter);
+    if (m.united && m.outer.n.squaredNorm() > 0.0) {
+      // (Offered without an outer plane too, they made flower_mold's voxel loop 3-6 % longer
+      // and the thin cuts no better: D/20's worst move 0.66 % against 0.60 %.)
+      best.offer(rest[0], serial, rest[1], serial, true, m.outer, m.madeOuter);
       for (int i = 0; i < 2; ++i)
         for (int j = 0; j < 2; ++j)
           best.offer(m.q[i], m.made[i], rest[j], serial, true, m.outer, m.madeOuter);
