@@ -39,7 +39,7 @@ struct KnownMiss {
 // The voxels: every total within 0.1 % and every move within 1 %, but the slot at 23.2 deg to
 // the grid re-cut 0.1 mm deeper +0.6 % (its walls' voxels, where the front of the next pass
 // crosses the corner of wall and floor, hold four planes for a step) and skims_ramps' top-face
-// skim again 0.01 mm lower across the ramps' walls +0.66 %, so 12 of floor_recut's 13 and 6 of
+// skim again 0.01 mm lower across the ramps' walls +0.60 %, so 12 of floor_recut's 13 and 6 of
 // skims_ramps' 7 moves of 1 mm^3 or more are within 0.5 %. (Two planes per partial voxel had
 // missed the pecks by up to -5.8 %, the skims -4.2 %, a floor re-cut -2.2 %, the ramps -1.4 /
 // +1.3 %.) The dexels: none. (The retracts that took what the step before them left, up to
