@@ -6,25 +6,24 @@
 // surface is the tangent plane of that distance moved by the surface's sagitta (curvature from
 // Sweep, averaged over the plane's section: plain tangent planes took 0.73 % too much of a
 // ball's first plunge step and 0.7 % of the finishing raster at 0.2 mm). A partial voxel keeps
-// the one or two planes that bound its material, and a new cut is clipped against them
-// (CubeClip.h) instead of the fraction rule min(fraction, 1 - cut), which was 0.8 % off per
-// step on a side cut and 1.5 % on arcs; keeping planes costs 48 bytes per partial voxel (68 with
-// the outer plane below; the example batch 1.1-1.4x the memory, the raster's grid 2x, its
-// loop 1.5-2x slower). Tried against the fraction rule and dropped: a plane reconstructed from the
-// neighbours' fractions (+0.5 % mean on slots), a 4^3 occupancy lattice per partial voxel (lattice
-// and fraction disagree by up to an eighth of a voxel along a wall), the minimum per octant (a
-// re-cut floor ratchets down).
-// Near a flat bottom's rim on steps that change height the voxel samples 4^3 sub-cubes, each
-// cutting the stored material sub-cube by sub-cube: one plane gave 1.85 % on a 5 deg ramp and
-// 2.2 % on a helix, 2^3 sub-cubes 0.72 % / 0.78 %, 3^3 would be 1.8x faster on a helix but
-// leave a ramp 0.62 % off; 8^3 before the curvature correction took a bore from 0.53 % to
-// 0.45 % at 5x the cost. Before the sub-cube cut, the nested rule (keep the smaller material)
-// saw the rim's cut as one plane and left +0.35 mm^3 of a 188.5 mm^3 ramp's floor (worst step
-// at any grid placement 0.57 %, now 0.37 %). Not the cause, measured: the depth inside the
-// union of tool positions (an exact support-function depth moved the excess only to +0.29).
-// Also tried for that floor: probing outward along the gradient (ramp totals +0.2 %), the probe
-// point's own normal (a 2 deg ramp 0.85 %), an exact footprint-and-floor wedge (0.84 %), an
-// exact-sign 16^3 lattice and 8^3 rim sub-cubes (unchanged).
+// the planes that bound its material (one or two, or a corner within a face: three, below),
+// and a new cut is clipped against them (CubeClip.h) instead of the fraction rule
+// min(fraction, 1 - cut), which was 0.8 % off per step on a side cut and 1.5 % on arcs;
+// keeping planes costs 48 bytes per partial voxel (68 with the outer plane below; the example
+// batch 1.1-1.4x the memory, the raster's grid 2x, its loop 1.5-2x slower). Tried against the
+// fraction rule and dropped: a plane reconstructed from the neighbours' fractions (+0.5 % mean on
+// slots), a 4^3 occupancy lattice per partial voxel (lattice and fraction disagree by up to an
+// eighth of a voxel along a wall), the minimum per octant (a re-cut floor ratchets down). Near a
+// flat bottom's rim on steps that change height the voxel samples 4^3 sub-cubes, each cutting the
+// stored material sub-cube by sub-cube: one plane gave 1.85 % on a 5 deg ramp and 2.2 % on a helix,
+// 2^3 sub-cubes 0.72 % / 0.78 %, 3^3 would be 1.8x faster on a helix but leave a ramp 0.62 % off;
+// 8^3 before the curvature correction took a bore from 0.53 % to 0.45 % at 5x the cost. Before the
+// sub-cube cut, the nested rule (keep the smaller material) saw the rim's cut as one plane and left
+// +0.35 mm^3 of a 188.5 mm^3 ramp's floor (worst step at any grid placement 0.57 %, now 0.37 %).
+// Not the cause, measured: the depth inside the union of tool positions (an exact support-function
+// depth moved the excess only to +0.29). Also tried for that floor: probing outward along the
+// gradient (ramp totals +0.2 %), the probe point's own normal (a 2 deg ramp 0.85 %), an exact
+// footprint-and-floor wedge (0.84 %), an exact-sign 16^3 lattice and 8^3 rim sub-cubes (unchanged).
 // On a straight step (a convex swept solid) the rim's voxel is now cut by the swept solid's
 // supporting planes normal to the swept distance's gradient at the voxel's corners outside it
 // (Sweep::support, exact): an outer polyhedron, exact for the rim's edge. The sub-cubes' own
