@@ -1659,17 +1659,7 @@ FloatGrid::Ptr resampledFractions(const StockFile& file, double h) {
           double boxLo[3], boxHi[3];
           const bool boxed = m < 1.0 && shellBox(acc, c, m, boxLo, boxHi);
           auto inside = [&](const HalfSpace* clip, int clips) {
-            HalfSpace all[9];
-            auto with = [&](std::initializer_list<int> which) {
-              int n = 0;
-              for (int w : which)
-                all[n++] = q[w];
-              all[n++] = q[2];
-              for (int t = 0; t < clips; ++t)
-                all[n++] = clip[t];
-              return cubeFraction(all, n);
-            };
-            return united ? with({0}) + with({1}) - with({0, 1}) : with({0, 1});
+            return materialShare(q, united, clip, clips, nullptr, &q[2]);
           };
           double factor = 0.0;
           if (count > 0) {
