@@ -442,25 +442,21 @@ class NearestPair {
   double share_ = -1.0;
 };
 
-/// Stores as the voxel's planes what the cut (inside `faces` half-spaces, taking `cutShare`)
-/// leaves of a voxel it alone bounds, within `outer` (keep-all: the whole voxel): a wedge's
-/// floor-or-wall corner exactly, else the one plane kept() gives.
+/// Stores as the voxel's planes what the cut (inside `faces` half-spaces) leaves of a voxel it
+/// alone bounds, within `outer` (keep-all: the whole voxel), holding `share` of the cube (the
+/// caller's: 1 - the cut's share without an outer plane): a wedge's floor-or-wall corner
+/// exactly, else the one plane kept() gives.
 template <typename Kept>
 void keepRestOfCut(LeafPlanes& planes, openvdb::Index offset, const HalfSpace cut[2], int faces,
-                   Kept&& kept, int serial, double cutShare, const HalfSpace& outer = HalfSpace{},
+                   Kept&& kept, int serial, double share, const HalfSpace& outer = HalfSpace{},
                    int madeOuter = kStockFace) {
-  const bool bounded = outer.n.squaredNorm() > 0.0;
-  if (faces == 2) {
-    const HalfSpace rest[2] = {cut[0].complement(), cut[1].complement()};
-    const double share =
-        bounded ? materialShare(rest, true, nullptr, 0, nullptr, &outer) : 1.0 - cutShare;
-    planes.set(offset, rest[0], serial, rest[1], serial, share, true, outer, madeOuter);
-  } else if (!bounded) {
-    planes.set(offset, kept(), serial, HalfSpace{}, kStockFace, 1.0 - cutShare);
-  } else {
-    const HalfSpace both[2] = {outer, kept()};
-    planes.set(offset, outer, madeOuter, kept(), serial, cubeFraction(both, 2));
-  }
+  if (faces == 2)
+    planes.set(offset, cut[0].complement(), serial, cut[1].complement(), serial, share, true, outer,
+               madeOuter);
+  else if (outer.n.squaredNorm() == 0.0)
+    planes.set(offset, kept(), serial, HalfSpace{}, kStockFace, share);
+  else
+    planes.set(offset, outer, madeOuter, kept(), serial, share);
 }
 
 /// A partial voxel's material as its planes tell: inside both planes q (or with `united`
@@ -510,7 +506,7 @@ double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
       planes.set(offset, q[0], made[0], q[1], made[1], held, true, m.outer, m.madeOuter);
       return std::min(before, restShare);
     }
-    keepRestOfCut(planes, offset, cut, faces, kept, serial, cutShare, m.outer, m.madeOuter);
+    keepRestOfCut(planes, offset, cut, faces, kept, serial, restShare, m.outer, m.madeOuter);
     return before * restShare / held;
   }
   // Another pass across the corner: what the cut takes of floor or wall, exactly.
@@ -754,9 +750,9 @@ const CornerProbe& probeCorner(const Sweep& sweep, const Coord& corner, double h
     const double after = std::min(before, 1.0 - cutShare);
     if (after > 0.0 && after < before) {
       if (wedge == 2)
-        keepRestOfCut(planes, offset, hull.data(), 2, kept, serial, cutShare);
+        keepRestOfCut(planes, offset, hull.data(), 2, kept, serial, 1.0 - cutShare);
       else
-        keepRestOfCut(planes, offset, &centrePlane, 1, kept, serial, cutShare);
+        keepRestOfCut(planes, offset, &centrePlane, 1, kept, serial, 1.0 - cutShare);
     }
     return after;
   }
@@ -868,7 +864,7 @@ double remaining(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   if (!storedMaterial(planes, offset, before, box, p, h, stored)) {  // all material
     const double after = std::min(before, 1.0 - cutShare);
     if (after > 0.0 && after < before)
-      keepRestOfCut(planes, offset, cut, faces, kept, serial, cutShare);
+      keepRestOfCut(planes, offset, cut, faces, kept, serial, 1.0 - cutShare);
     return after;
   }
   HalfSpace* q = stored.q;
