@@ -9,13 +9,14 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
 namespace engage {
 
 /// What a move does.
-enum class MoveKind { Rapid, Line, Arc, Spline };
+enum class MoveKind : std::uint8_t { Rapid, Line, Arc, Spline };
 
 /// Arc plane (G17, G18, G19). Arcs turn about the plane's normal: +Z, +Y, +X respectively.
 enum class Plane { XY, XZ, YZ };

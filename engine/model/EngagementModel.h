@@ -20,12 +20,13 @@
 #include "cutters/AptCutter.h"
 #include "cutters/CrossSection.h"
 
+#include <cstdint>
 #include <optional>
 
 namespace engage {
 
 /// Which side of a curved path the stock is on (DESIGN.md "Material side and curvature").
-enum class PathSide {
+enum class PathSide : std::uint8_t {
   Straight,  ///< no curvature
   Concave,   ///< stock on the outer side of the curve: MRR above linear
   Convex,    ///< stock on the inner side of the curve: MRR below linear

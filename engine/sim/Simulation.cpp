@@ -309,7 +309,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       out.stepSeconds.push_back(
           std::chrono::duration<double>(std::chrono::steady_clock::now() - stepStart).count());
     r.removed = rem.volume;
-    r.voxelsChanged = rem.voxelsChanged;
+    r.voxelsChanged = static_cast<std::int32_t>(rem.voxelsChanged);
     r.width = rem.radialWidth;
     r.depth = rem.axialDepth;
     r.engagementRad = rem.engagementRad;
