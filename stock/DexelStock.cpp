@@ -21,10 +21,12 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kZTolerance = 1e-4;
 /// Angular bins of the engagement arc.
 constexpr int kAngleBins = 256;
-/// A step's box of at least this many columns has its rows removed side by side where there
-/// are cores (fewer: one after another, a thread's start costing more than it saves); a step
-/// that keeps its height (a closed form per column) needs more.
+/// Steps whose boxes hold at least this many columns (together) have their tiles removed side
+/// by side where there are cores (fewer: one after another, a thread's start costing more than
+/// it saves); a column of a step that keeps its height (a closed form) counts less.
 constexpr long kParallelColumns = 40, kParallelFlatColumns = 256;
+/// Columns a tile holds along x and along y (DexelStock::removeSteps).
+constexpr int kTile = 16;
 
 using Interval = DexelStock::Interval;
 using Intervals = std::vector<Interval>;
@@ -826,227 +828,309 @@ std::vector<double> DexelStock::materialAt(const std::vector<Eigen::Vector3d>& p
 }
 
 Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
-  const Box3 sb = sweep.bounds();
-  const StepPath& path = sweep.path();
-  const AptCutter& cutter = sweep.cutter();
-  // Closed form: steps that keep their height, and plunges and retracts (the cutter from its
-  // lowest to its highest position), of cutters that widen upwards.
-  const bool vertical = path.kind == StepPath::Kind::Line &&
-                        (path.end.head<2>() - path.start.head<2>()).norm() < 1e-12;
-  const bool flat = (vertical || (std::abs(path.end.z() - path.start.z()) < 1e-12 &&
-                                  path.kind != StepPath::Kind::Polyline)) &&
-                    widensUpwards(cutter);
-  // Steps that change height, of such cutters: lines, helix pieces of less than a quarter
-  // turn, and the line pieces of polylines (arcs in the XZ and YZ planes, splines), each
-  // seen from every ray by rampSolid. Others (inward-leaning sides, longer turns): the march.
-  std::vector<StepPath> pieces;
-  if (!flat && widensUpwards(cutter)) {
-    if (path.kind == StepPath::Kind::Line ||
-        (path.kind == StepPath::Kind::ArcXY && std::abs(path.sweepRad) < 0.5 * kPi)) {
-      pieces.push_back(path);
-    } else if (path.kind == StepPath::Kind::Polyline) {
-      for (std::size_t k = 1; k < path.points.size(); ++k) {
-        StepPath line;
-        line.start = path.points[k - 1];
-        line.end = path.points[k];
-        pieces.push_back(line);
+  return removeSteps({StepCut{&sweep, step, dtSeconds}}).front();
+}
+
+std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) {
+  // What each step does to every column, read only while the tiles run.
+  struct Plan {
+    Box3 sb;
+    bool flat = false;
+    std::vector<StepPath> pieces;
+    int i0 = 0, i1 = -1, j0 = 0, j1 = -1;
+    Eigen::Vector2d u, n;  // feed direction at the step's end (as the voxel stock takes it), left
+  };
+  std::vector<Plan> plans(steps.size());
+  double work = 0.0;  // columns that change height; a height-keeping one counts less (below)
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    Plan& g = plans[s];
+    const Sweep& sweep = *steps[s].sweep;
+    const StepPath& path = sweep.path();
+    const AptCutter& cutter = sweep.cutter();
+    g.sb = sweep.bounds();
+    // Closed form: steps that keep their height, and plunges and retracts (the cutter from its
+    // lowest to its highest position), of cutters that widen upwards.
+    const bool vertical = path.kind == StepPath::Kind::Line &&
+                          (path.end.head<2>() - path.start.head<2>()).norm() < 1e-12;
+    g.flat = (vertical || (std::abs(path.end.z() - path.start.z()) < 1e-12 &&
+                           path.kind != StepPath::Kind::Polyline)) &&
+             widensUpwards(cutter);
+    // Steps that change height, of such cutters: lines, helix pieces of less than a quarter
+    // turn, and the line pieces of polylines (arcs in the XZ and YZ planes, splines), each
+    // seen from every ray by rampSolid. Others (inward-leaning sides, longer turns): the march.
+    if (!g.flat && widensUpwards(cutter)) {
+      if (path.kind == StepPath::Kind::Line ||
+          (path.kind == StepPath::Kind::ArcXY && std::abs(path.sweepRad) < 0.5 * kPi)) {
+        g.pieces.push_back(path);
+      } else if (path.kind == StepPath::Kind::Polyline) {
+        for (std::size_t k = 1; k < path.points.size(); ++k) {
+          StepPath line;
+          line.start = path.points[k - 1];
+          line.end = path.points[k];
+          g.pieces.push_back(line);
+        }
       }
     }
+    g.i0 = std::max(0, static_cast<int>(std::floor((g.sb.min.x() - x0_) / h_ - 0.5)));
+    g.i1 = std::min(nx_ - 1, static_cast<int>(std::ceil((g.sb.max.x() - x0_) / h_ - 0.5)));
+    g.j0 = std::max(0, static_cast<int>(std::floor((g.sb.min.y() - y0_) / h_ - 0.5)));
+    g.j1 = std::min(ny_ - 1, static_cast<int>(std::ceil((g.sb.max.y() - y0_) / h_ - 0.5)));
+    g.u = path.feedDirectionAtEnd();
+    g.n = Eigen::Vector2d(-g.u.y(), g.u.x());
+    if (g.i1 >= g.i0 && g.j1 >= g.j0)
+      work += static_cast<double>(g.i1 - g.i0 + 1) * (g.j1 - g.j0 + 1) *
+              (g.flat ? static_cast<double>(kParallelColumns) / kParallelFlatColumns : 1.0);
   }
-  const int i0 = std::max(0, static_cast<int>(std::floor((sb.min.x() - x0_) / h_ - 0.5)));
-  const int i1 = std::min(nx_ - 1, static_cast<int>(std::ceil((sb.max.x() - x0_) / h_ - 0.5)));
-  const int j0 = std::max(0, static_cast<int>(std::floor((sb.min.y() - y0_) / h_ - 0.5)));
-  const int j1 = std::min(ny_ - 1, static_cast<int>(std::ceil((sb.max.y() - y0_) / h_ - 0.5)));
 
-  // Feed direction at the step's end, as the voxel stock takes it.
-  const Eigen::Vector3d end = path.end;
-  const Eigen::Vector2d u = path.feedDirectionAtEnd();
-  const Eigen::Vector2d n(-u.y(), u.x());
-
-  // Each row of columns apart (its sums, its cuts, the loss columns it starts), the rows then
-  // taken in order: the same sums whatever the thread count.
+  // The columns in tiles; each tile applies the steps that reach it in their order, with its
+  // own sums per step (a Part) and the loss columns it starts; the steps' sums are then taken
+  // tile by tile in the tiles' order: the same sums whatever the thread count and however
+  // the steps come in batches.
   struct Cut {
     Eigen::Vector2d xy;
     double z0, z1;
   };
-  struct Row {
+  struct Part {
     double volume = 0.0, lateral = 0.0, sMin = 1e300, sMax = -1e300;
     long changed = 0, visited = 0;
-    std::vector<Cut> cuts;  // (rows side by side; one after another, into the step's)
-    std::vector<std::pair<std::size_t, LostColumn>> started;  // (ray, its losses) new here
+    std::size_t cutsEnd = 0;  // its cuts: the tile's from the last part's end to this
   };
-  auto removeRow = [&](int j, Row& row, std::vector<Cut>& rowCuts, std::vector<Interval>& solid) {
-    for (int i = i0; i <= i1; ++i) {
-      Intervals& ray = rays_[index(i, j)];
-      if (ray.empty()) continue;
-      const Eigen::Vector2d q(x0_ + (i + 0.5) * h_, y0_ + (j + 0.5) * h_);
-      // The swept solid along this ray: intervals with the share of the column it covers.
-      solid.clear();
-      if (flat) {
-        if (!steadySolid(path, cutter, q, h_, ray.back().z1, solid)) continue;
-      } else if (!pieces.empty()) {
-        ++row.visited;
-        for (const StepPath& piece : pieces)
-          rampSolid(piece, cutter, q, h_, ray.back().z1, solid);
-        if (solid.empty()) continue;
-      } else {
-        ++row.visited;
-        const double lo = std::max(sb.min.z(), ray.front().z0) - kZTolerance;
-        const double hi = std::min(sb.max.z(), ray.back().z1) + kZTolerance;
-        if (!(hi > lo)) continue;
-        auto d = [&](double z) { return sweep.signedDistance({q.x(), q.y(), z}); };
-        double z = lo, dz = d(z);
-        bool inside = dz < 0.0;
-        double entry = lo;
-        while (z < hi) {
-          // At least h/8 a step: the distance only shrinks towards the surface (a bound),
-          // and a sliver thinner than that is below the model's resolution anyway.
-          const double advance = std::max(std::abs(dz), 0.125 * h_);
-          double z2 = std::min(z + advance, hi);
-          const double d2 = d(z2);
-          if ((d2 < 0.0) != inside) {
-            double a = z, b = z2;  // a sign change within [a, b]: bisect it
-            while (b - a > kZTolerance) {
-              const double m = 0.5 * (a + b);
-              ((d(m) < 0.0) == inside ? a : b) = m;
-            }
-            const double crossing = 0.5 * (a + b);
-            if (inside)
-              solid.push_back({entry, crossing, 1.0});
-            else
-              entry = crossing;
-            inside = !inside;
+  struct Started {
+    std::size_t step;  // in this batch
+    std::size_t ray;
+    LostColumn column;
+  };
+  struct Tile {
+    int index = 0;
+    std::vector<std::size_t> steps;  // in order
+    std::vector<Part> parts;         // one for each of steps
+    std::vector<Cut> cuts;           // the parts' cuts, one part after another
+    std::vector<Started> started;    // in the order started
+  };
+  const int tilesX = (nx_ + kTile - 1) / kTile;
+  std::vector<std::pair<int, std::size_t>> reach;  // (tile, step), by tile then step
+  for (std::size_t s = 0; s < plans.size(); ++s) {
+    const Plan& g = plans[s];
+    if (g.i1 < g.i0 || g.j1 < g.j0) continue;
+    for (int tj = g.j0 / kTile; tj <= g.j1 / kTile; ++tj)
+      for (int ti = g.i0 / kTile; ti <= g.i1 / kTile; ++ti)
+        reach.emplace_back(tj * tilesX + ti, s);
+  }
+  std::sort(reach.begin(), reach.end());
+  std::vector<Tile> tiles;
+  for (const auto& [t, s] : reach) {
+    if (tiles.empty() || tiles.back().index != t) {
+      tiles.emplace_back();
+      tiles.back().index = t;
+    }
+    tiles.back().steps.push_back(s);
+  }
+
+  // One column (i, j) of the tile under step s.
+  auto removeColumn = [&](std::size_t s, int i, int j, Part& part, Tile& tile, std::int32_t* local,
+                          std::vector<Interval>& solid) {
+    Intervals& ray = rays_[index(i, j)];
+    if (ray.empty()) return;
+    const Plan& g = plans[s];
+    const Sweep& sweep = *steps[s].sweep;
+    const StepPath& path = sweep.path();
+    const AptCutter& cutter = sweep.cutter();
+    const Eigen::Vector2d q(x0_ + (i + 0.5) * h_, y0_ + (j + 0.5) * h_);
+    // The swept solid along this ray: intervals with the share of the column it covers.
+    solid.clear();
+    if (g.flat) {
+      if (!steadySolid(path, cutter, q, h_, ray.back().z1, solid)) return;
+    } else if (!g.pieces.empty()) {
+      ++part.visited;
+      for (const StepPath& piece : g.pieces)
+        rampSolid(piece, cutter, q, h_, ray.back().z1, solid);
+      if (solid.empty()) return;
+    } else {
+      ++part.visited;
+      const double lo = std::max(g.sb.min.z(), ray.front().z0) - kZTolerance;
+      const double hi = std::min(g.sb.max.z(), ray.back().z1) + kZTolerance;
+      if (!(hi > lo)) return;
+      auto d = [&](double z) { return sweep.signedDistance({q.x(), q.y(), z}); };
+      double z = lo, dz = d(z);
+      bool inside = dz < 0.0;
+      double entry = lo;
+      while (z < hi) {
+        // At least h/8 a step: the distance only shrinks towards the surface (a bound),
+        // and a sliver thinner than that is below the model's resolution anyway.
+        const double advance = std::max(std::abs(dz), 0.125 * h_);
+        double z2 = std::min(z + advance, hi);
+        const double d2 = d(z2);
+        if ((d2 < 0.0) != inside) {
+          double a = z, b = z2;  // a sign change within [a, b]: bisect it
+          while (b - a > kZTolerance) {
+            const double m = 0.5 * (a + b);
+            ((d(m) < 0.0) == inside ? a : b) = m;
           }
-          z = z2;
-          dz = d2;
+          const double crossing = 0.5 * (a + b);
+          if (inside)
+            solid.push_back({entry, crossing, 1.0});
+          else
+            entry = crossing;
+          inside = !inside;
         }
-        if (inside) solid.push_back({entry, hi, 1.0});
+        z = z2;
+        dz = d2;
       }
-      double removed = 0.0;
-      LostColumn* column = nullptr;  // this ray's losses, found or started on its first loss
-      for (const Interval& sx : solid) {
-        // What of the ray in [z0, z1] loses material; remember where, for the engagement.
+      if (inside) solid.push_back({entry, hi, 1.0});
+    }
+    double removed = 0.0;
+    LostColumn* column = nullptr;  // this ray's losses, found or started on its first loss
+    for (const Interval& sx : solid) {
+      // What of the ray in [z0, z1] loses material; remember where, for the engagement.
+      for (const Interval& x : ray)
+        if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f + kSameShare)
+          tile.cuts.push_back({q, std::max(x.z0, sx.z0), std::min(x.z1, sx.z1)});
+      // The capture: what each of the ray's intervals the piece cuts loses, as cut() takes
+      // it, summed into the column's cells of voxel height, with the first step to take some
+      // (so that removed.vdb holds the removed volume, and in its place). A log of one entry
+      // per column, step and span at the span's mean share had put a wall column's rest and
+      // the material below it at one share: up to 1.6 voxels of material in some voxels of
+      // CAMotics' heart, and removed.vdb (its voxels held to 1) 2.7 % short of the removed
+      // volume (bear 0.8 %, tiger 0.4 %); now exact to float rounding. The cells take less
+      // memory than that log (bear 246 -> 200 MB, cameo 435 -> 398 MB) and the loop 5-7 %
+      // longer (cameo 3.24 -> 3.45 s, bear 2.26 -> 2.39 s, medians of three alternating
+      // runs, one core). Entries per ray interval (exact, but bear 734 MB), or merged within
+      // 0.1 of share (heart -0.14 %, bear 452 MB), were tried first.
+      const double keep = 1.0 - sx.f;
+      if (capture_) {
         for (const Interval& x : ray)
-          if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f + kSameShare)
-            rowCuts.push_back({q, std::max(x.z0, sx.z0), std::min(x.z1, sx.z1)});
-        // The capture: what each of the ray's intervals the piece cuts loses, as cut() takes
-        // it, summed into the column's cells of voxel height, with the first step to take some
-        // (so that removed.vdb holds the removed volume, and in its place). A log of one entry
-        // per column, step and span at the span's mean share had put a wall column's rest and
-        // the material below it at one share: up to 1.6 voxels of material in some voxels of
-        // CAMotics' heart, and removed.vdb (its voxels held to 1) 2.7 % short of the removed
-        // volume (bear 0.8 %, tiger 0.4 %); now exact to float rounding. The cells take less
-        // memory than that log (bear 246 -> 200 MB, cameo 435 -> 398 MB) and the loop 5-7 %
-        // longer (cameo 3.24 -> 3.45 s, bear 2.26 -> 2.39 s, medians of three alternating
-        // runs, one core). Entries per ray interval (exact, but bear 734 MB), or merged within
-        // 0.1 of share (heart -0.14 %, bear 452 MB), were tried first.
-        const double keep = 1.0 - sx.f;
-        if (capture_) {
-          for (const Interval& x : ray)
-            if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > keep + kSameShare) {
-              if (!column) {
-                const std::uint32_t at = lostIndex_[index(i, j)];
-                if (at != kNoColumn) {
-                  column = &lost_[at];
-                } else {
-                  row.started.emplace_back(index(i, j), LostColumn{});
-                  column = &row.started.back().second;
-                }
+          if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > keep + kSameShare) {
+            if (!column) {
+              // Found in lost_, or among those this tile started in this batch, or started.
+              const std::uint32_t at = lostIndex_[index(i, j)];
+              const std::size_t k = static_cast<std::size_t>((j % kTile) * kTile + i % kTile);
+              if (at != kNoColumn) {
+                column = &lost_[at];
+              } else if (local[k] >= 0) {
+                column = &tile.started[static_cast<std::size_t>(local[k])].column;
+              } else {
+                local[k] = static_cast<std::int32_t>(tile.started.size());
+                tile.started.push_back({s, index(i, j), LostColumn{}});
+                column = &tile.started.back().column;
               }
-              const double share = (x.f - keep) * weight_[index(i, j)];
-              voxelHeights(h_, std::max(x.z0, sx.z0), std::min(x.z1, sx.z1), [&](int k, double z) {
-                Lost& cell = lostCell(*column, k);
-                cell.share += static_cast<float>(z * share);
-                if (cell.step < 0) cell.step = step;
-              });
             }
-        }
-        removed += cut(ray, sx.z0, sx.z1, keep);
+            const double share = (x.f - keep) * weight_[index(i, j)];
+            voxelHeights(h_, std::max(x.z0, sx.z0), std::min(x.z1, sx.z1), [&](int k, double z) {
+              Lost& cell = lostCell(*column, k);
+              cell.share += static_cast<float>(z * share);
+              if (cell.step < 0) cell.step = steps[s].step;
+            });
+          }
       }
-      if (removed <= 0.0) continue;
-      const double w = weight_[index(i, j)];
-      const double volume = removed * w * h_ * h_;
-      row.volume += volume;
-      ++row.changed;
-      const double side = (q - end.head<2>()).dot(n);
-      row.lateral += volume * side;
-      row.sMin = std::min(row.sMin, side - 0.5 * h_);
-      row.sMax = std::max(row.sMax, side + 0.5 * h_);
+      removed += cut(ray, sx.z0, sx.z1, keep);
+    }
+    if (removed <= 0.0) return;
+    const double w = weight_[index(i, j)];
+    const double volume = removed * w * h_ * h_;
+    part.volume += volume;
+    ++part.changed;
+    const double side = (q - path.end.head<2>()).dot(g.n);
+    part.lateral += volume * side;
+    part.sMin = std::min(part.sMin, side - 0.5 * h_);
+    part.sMax = std::max(part.sMax, side + 0.5 * h_);
+  };
+  // A tile: the steps that reach it in order, each over its columns row by row. Its loss
+  // columns are started in its own list (lost_ must not grow, and move, under another
+  // tile's writes), found there again by `local` until the batch is taken.
+  auto runTile = [&](Tile& tile) {
+    tile.parts.resize(tile.steps.size());
+    std::int32_t local[kTile * kTile];
+    std::fill(local, local + kTile * kTile, -1);
+    static thread_local std::vector<Interval> solid;  // (scratch, no allocation once grown)
+    const int ti0 = (tile.index % tilesX) * kTile, tj0 = (tile.index / tilesX) * kTile;
+    for (std::size_t a = 0; a < tile.steps.size(); ++a) {
+      const std::size_t s = tile.steps[a];
+      const Plan& g = plans[s];
+      for (int j = std::max(g.j0, tj0); j <= std::min(g.j1, tj0 + kTile - 1); ++j)
+        for (int i = std::max(g.i0, ti0); i <= std::min(g.i1, ti0 + kTile - 1); ++i)
+          removeColumn(s, i, j, tile.parts[a], tile, local, solid);
+      tile.parts[a].cutsEnd = tile.cuts.size();
     }
   };
-  Removal out;
-  double zMin = 1e300, zMax = -1e300, sMin = 1e300, sMax = -1e300;
-  std::vector<Cut> cuts;
-  auto take = [&](Row& row) {
-    out.volume += row.volume;
-    out.lateral += row.lateral;
-    out.voxelsChanged += row.changed;
-    out.voxelsVisited += row.visited;
-    sMin = std::min(sMin, row.sMin);
-    sMax = std::max(sMax, row.sMax);
-    cuts.insert(cuts.end(), row.cuts.begin(), row.cuts.end());  // (empty one after another)
-    for (auto& [ray, column] : row.started) {
-      lostIndex_[ray] = static_cast<std::uint32_t>(lost_.size());
-      lost_.push_back(std::move(column));
-    }
-  };
-  const int rows = j1 - j0 + 1;
-  const long columns = static_cast<long>(std::max(rows, 0)) * std::max(i1 - i0 + 1, 0);
-  if (rows > 1 && columns >= (flat ? kParallelFlatColumns : kParallelColumns) &&
-      tbb::this_task_arena::max_concurrency() > 1) {
-    // Rows side by side. A ray's started losses stay in its row until the rows are taken, so
-    // that lost_ does not grow (and move) under another row's writes.
-    std::vector<Row> parts(static_cast<std::size_t>(rows));
-    tbb::parallel_for(tbb::blocked_range<int>(j0, j1 + 1), [&](const tbb::blocked_range<int>& r) {
-      std::vector<Interval> solid;
-      for (int j = r.begin(); j != r.end(); ++j) {
-        Row& row = parts[static_cast<std::size_t>(j - j0)];
-        removeRow(j, row, row.cuts, solid);
-      }
-    });
-    for (Row& row : parts)
-      take(row);
+  if (tiles.size() > 1 && work >= kParallelColumns && tbb::this_task_arena::max_concurrency() > 1) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t t = r.begin(); t != r.end(); ++t)
+                          runTile(tiles[t]);
+                      });
   } else {
-    std::vector<Interval> solid;
-    for (int j = j0; j <= j1; ++j) {
-      Row row;
-      removeRow(j, row, cuts, solid);
-      take(row);
+    for (Tile& tile : tiles)
+      runTile(tile);
+  }
+
+  // Each step's sums, tile by tile; the loss columns its tiles started join lost_.
+  std::vector<Removal> outs(steps.size());
+  std::vector<std::size_t> nextPart(tiles.size(), 0), nextStarted(tiles.size(), 0);
+  std::vector<Cut> cuts;
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    const Plan& g = plans[s];
+    const StepPath& path = steps[s].sweep->path();
+    const AptCutter& cutter = steps[s].sweep->cutter();
+    const Eigen::Vector3d end = path.end;
+    Removal& out = outs[s];
+    double zMin = 1e300, zMax = -1e300, sMin = 1e300, sMax = -1e300;
+    cuts.clear();
+    for (std::size_t t = 0; t < tiles.size(); ++t) {
+      Tile& tile = tiles[t];
+      if (nextPart[t] < tile.steps.size() && tile.steps[nextPart[t]] == s) {
+        const std::size_t from = nextPart[t] == 0 ? 0 : tile.parts[nextPart[t] - 1].cutsEnd;
+        const Part& part = tile.parts[nextPart[t]++];
+        out.volume += part.volume;
+        out.lateral += part.lateral;
+        out.voxelsChanged += part.changed;
+        out.voxelsVisited += part.visited;
+        sMin = std::min(sMin, part.sMin);
+        sMax = std::max(sMax, part.sMax);
+        cuts.insert(cuts.end(), tile.cuts.begin() + static_cast<std::ptrdiff_t>(from),
+                    tile.cuts.begin() + static_cast<std::ptrdiff_t>(part.cutsEnd));
+      }
+      for (; nextStarted[t] < tile.started.size() && tile.started[nextStarted[t]].step == s;
+           ++nextStarted[t]) {
+        Started& st = tile.started[nextStarted[t]];
+        lostIndex_[st.ray] = static_cast<std::uint32_t>(lost_.size());
+        lost_.push_back(std::move(st.column));
+      }
+    }
+    if (out.voxelsChanged > 0) {
+      for (const Cut& c : cuts) {
+        zMin = std::min(zMin, c.z0 - end.z());
+        zMax = std::max(zMax, c.z1 - end.z());
+      }
+      out.lateral /= out.volume;
+      out.axialDepth = std::min(zMax - std::max(zMin, 0.0), cutter.height());
+      out.top = std::min(zMax, cutter.height());
+      out.radialWidth = sMax - sMin;
+      // Engagement angle: the arc of the periphery, at mid depth, where this step removed
+      // material (rays within a column of the cutter's edge there).
+      const double zMid = std::clamp(0.5 * out.axialDepth, 0.0, cutter.height());
+      const double edge = cutter.radiusAt(zMid);
+      std::vector<bool> bin(kAngleBins, false);
+      for (const Cut& c : cuts) {
+        if (c.z0 > end.z() + zMid || c.z1 < end.z() + zMid) continue;
+        const Eigen::Vector2d rel = c.xy - end.head<2>();
+        if (std::abs(rel.norm() - edge) > h_) continue;
+        double theta = std::atan2(rel.dot(g.n), rel.dot(g.u));
+        if (theta < 0) theta += 2.0 * kPi;
+        bin[static_cast<std::size_t>(
+            std::min(kAngleBins - 1.0, theta / (2.0 * kPi) * kAngleBins))] = true;
+      }
+      out.engagementRad =
+          2.0 * kPi * static_cast<double>(std::count(bin.begin(), bin.end(), true)) / kAngleBins;
+    }
+    const int step = steps[s].step;
+    if (capture_ && step >= 0) {
+      if (stepMrr_.size() <= static_cast<std::size_t>(step))
+        stepMrr_.resize(static_cast<std::size_t>(step) + 1, 0.0);
+      const double dt = steps[s].dtSeconds;
+      stepMrr_[static_cast<std::size_t>(step)] = dt > 0.0 ? out.volume / (dt / 60.0) : 0.0;
     }
   }
-  if (out.voxelsChanged > 0) {
-    for (const Cut& c : cuts) {
-      zMin = std::min(zMin, c.z0 - end.z());
-      zMax = std::max(zMax, c.z1 - end.z());
-    }
-    out.lateral /= out.volume;
-    out.axialDepth = std::min(zMax - std::max(zMin, 0.0), cutter.height());
-    out.top = std::min(zMax, cutter.height());
-    out.radialWidth = sMax - sMin;
-    // Engagement angle: the arc of the periphery, at mid depth, where this step removed
-    // material (rays within a column of the cutter's edge there).
-    const double zMid = std::clamp(0.5 * out.axialDepth, 0.0, cutter.height());
-    const double edge = cutter.radiusAt(zMid);
-    std::vector<bool> bin(kAngleBins, false);
-    for (const Cut& c : cuts) {
-      if (c.z0 > end.z() + zMid || c.z1 < end.z() + zMid) continue;
-      const Eigen::Vector2d rel = c.xy - end.head<2>();
-      if (std::abs(rel.norm() - edge) > h_) continue;
-      double theta = std::atan2(rel.dot(n), rel.dot(u));
-      if (theta < 0) theta += 2.0 * kPi;
-      bin[static_cast<std::size_t>(std::min(kAngleBins - 1.0, theta / (2.0 * kPi) * kAngleBins))] =
-          true;
-    }
-    out.engagementRad =
-        2.0 * kPi * static_cast<double>(std::count(bin.begin(), bin.end(), true)) / kAngleBins;
-  }
-  if (capture_ && step >= 0) {
-    if (stepMrr_.size() <= static_cast<std::size_t>(step))
-      stepMrr_.resize(static_cast<std::size_t>(step) + 1, 0.0);
-    stepMrr_[static_cast<std::size_t>(step)] =
-        dtSeconds > 0.0 ? out.volume / (dtSeconds / 60.0) : 0.0;
-  }
-  return out;
+  return outs;
 }
 
 }  // namespace engage

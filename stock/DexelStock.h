@@ -55,6 +55,10 @@ class DexelStock : public Stock {
   double volume() const override;
   Box3 bounds() const override;
   Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) override;
+  /// The steps tile by tile (16 x 16 columns), the tiles side by side where there are cores and
+  /// work enough, each applying the steps that reach it in their order: the removals of
+  /// remove() one step after another, to the bit, whatever the thread count.
+  std::vector<Removal> removeSteps(const std::vector<StepCut>& steps) override;
   double materialInside(const Sweep& sweep, double top) const override;
   std::vector<double> materialAt(const std::vector<Eigen::Vector3d>& points) const override;
 

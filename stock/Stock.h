@@ -29,6 +29,14 @@ struct Removal {
   long voxelsVisited = 0;  ///< cells whose distance was evaluated
 };
 
+/// One step for Stock::removeSteps: its swept solid (alive until the call returns), the
+/// step's number and duration (as remove takes them).
+struct StepCut {
+  const Sweep* sweep = nullptr;
+  int step = 0;
+  double dtSeconds = 0.0;
+};
+
 /// A stock model.
 class Stock {
  public:
@@ -53,6 +61,16 @@ class Stock {
   virtual std::vector<double> materialAt(const std::vector<Eigen::Vector3d>& points) const = 0;
   /// Remove one step's swept solid; `step` and `dtSeconds` label it (for capture grids).
   virtual Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) = 0;
+  /// Remove consecutive steps in their order, nothing read from the stock between them: the
+  /// removals remove() would give one after another. A model may take them together (the
+  /// dexel stock: tiles of columns side by side, each applying the steps that reach it).
+  virtual std::vector<Removal> removeSteps(const std::vector<StepCut>& steps) {
+    std::vector<Removal> out;
+    out.reserve(steps.size());
+    for (const StepCut& s : steps)
+      out.push_back(remove(*s.sweep, s.step, s.dtSeconds));
+    return out;
+  }
 };
 
 }  // namespace engage

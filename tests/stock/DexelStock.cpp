@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 #include <vector>
 
 using namespace engage;
@@ -233,42 +234,72 @@ TEST_CASE("dexel: the captured removal puts each step's material where it was", 
   CHECK(beyond < 1e-6);
 }
 
-TEST_CASE("dexel: every step and its captured losses the same at any thread count", "[stock]") {
-  // A step's rows of rays go side by side on several cores when its box is large enough (a
-  // ramp's 40 columns, a level step's 256): a 6 mm ball ramping down and across at 0.3 mm
-  // (about 20 x 22 columns a step) and a 10 mm flat end mill's level pass (about 35 x 36).
-  // Each row's sums are taken in row order, so that one thread and two give the same bits.
+TEST_CASE(
+    "dexel: every step and its captured losses the same at any thread count, in batches or not",
+    "[stock]") {
+  // A removal runs tile by tile (16 x 16 columns), the tiles side by side on several cores
+  // when the steps' boxes hold enough columns, each tile applying the steps that reach it in
+  // their order, and each step's sums taken tile by tile in the tiles' order: one thread and
+  // four, and steps one at a time or in batches, give the same bits. A 6 mm ball ramping down
+  // and across at 0.3 mm (about 20 x 22 columns a step, two to four tiles) and a 10 mm flat
+  // end mill's level pass over the ramp's groove (about 35 x 36).
   const AptCutter ball = AptCutter::ball(6.0, 18.0), flat = AptCutter::flat(10.0, 18.0);
-  auto removeAll = [&] {
+  std::vector<Sweep> sweeps;
+  for (int k = 0; k < 24; ++k) {
+    const Eigen::Vector3d p0(-15.0 + 1.2 * k, -4.0 + 0.35 * k, -0.1 * k);
+    sweeps.emplace_back(ball, line(p0, p0 + Eigen::Vector3d(1.2, 0.35, -0.1)), 0.3);
+  }
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d p0(-14.0 + 3.5 * k, 1.0, -1.0);
+    sweeps.emplace_back(flat, line(p0, p0 + Eigen::Vector3d(3.5, 0.0, 0.0)), 0.3);
+  }
+  // batch 0: remove() step by step; else removeSteps() in batches of that many steps.
+  auto removeAll = [&](std::size_t batch) {
     DexelStock s = DexelStock::box(block(20.0, 6.0), 0.3);
     s.captureRemoved(true);
-    std::vector<double> steps;
-    for (int k = 0; k < 24; ++k) {
-      const Eigen::Vector3d p0(-15.0 + 1.2 * k, -4.0 + 0.35 * k, -0.1 * k);
-      steps.push_back(
-          s.remove(Sweep(ball, line(p0, p0 + Eigen::Vector3d(1.2, 0.35, -0.1)), 0.3)).volume);
+    std::vector<Removal> steps;
+    for (std::size_t k = 0; k < sweeps.size(); k += std::max<std::size_t>(batch, 1)) {
+      if (batch == 0) {
+        steps.push_back(s.remove(sweeps[k], static_cast<int>(k), 0.1));
+        continue;
+      }
+      std::vector<StepCut> cuts;
+      for (std::size_t n = k; n < std::min(sweeps.size(), k + batch); ++n)
+        cuts.push_back({&sweeps[n], static_cast<int>(n), 0.1});
+      for (const Removal& r : s.removeSteps(cuts))
+        steps.push_back(r);
     }
-    for (int k = 0; k < 8; ++k) {
-      const Eigen::Vector3d p0(-14.0 + 3.5 * k, 6.0, -1.0);
-      steps.push_back(
-          s.remove(Sweep(flat, line(p0, p0 + Eigen::Vector3d(3.5, 0.0, 0.0)), 0.3)).volume);
-    }
-    std::vector<float> lost;
+    std::vector<double> numbers;  // every field of every step's removal
+    for (const Removal& r : steps)
+      numbers.insert(numbers.end(),
+                     {r.volume, r.axialDepth, r.radialWidth, r.top, r.engagementRad, r.lateral,
+                      static_cast<double>(r.voxelsChanged), static_cast<double>(r.voxelsVisited)});
+    std::vector<double> rest;  // what every ray holds after, and what it lost, when
     for (int j = 0; j < s.raysY(); ++j)
-      for (int i = 0; i < s.raysX(); ++i)
+      for (int i = 0; i < s.raysX(); ++i) {
+        for (const DexelStock::Interval& x : s.ray(i, j))
+          rest.insert(rest.end(), {x.z0, x.z1, x.f});
         if (const DexelStock::LostColumn* c = s.removedColumn(i, j))
           for (const DexelStock::Lost& cell : c->cells)
-            lost.push_back(cell.share + static_cast<float>(cell.step));
-    return std::make_pair(steps, lost);
+            rest.insert(rest.end(), {static_cast<double>(cell.share), 1.0 * cell.step});
+      }
+    return std::make_tuple(numbers, rest, steps.front().volume, s.stepMrr());
   };
-  // In an arena of one thread a removal takes its rows one after another; of two, side by side.
-  auto run = [&](int threads) {
-    return tbb::task_arena(threads).execute([&] { return removeAll(); });
+  // In an arena of one thread the tiles go one after another; of four, side by side.
+  auto run = [&](int threads, std::size_t batch) {
+    return tbb::task_arena(threads).execute([&] { return removeAll(batch); });
   };
-  const auto one = run(1);
-  const auto two = run(2);
-  CHECK(one.first == two.first);  // bit for bit
-  CHECK(one.second == two.second);
-  // (Cuts were made: not a comparison of nothing.)
-  CHECK(*std::min_element(one.first.begin(), one.first.end()) > 0.1);
+  const auto one = run(1, 0);
+  for (const auto& [threads, batch] :
+       {std::pair<int, std::size_t>{4, 0}, {1, 32}, {4, 32}, {4, 5}}) {
+    INFO(threads << " threads, batches of " << batch << " steps");
+    const auto other = run(threads, batch);
+    CHECK(std::get<0>(one) == std::get<0>(other));  // bit for bit
+    CHECK(std::get<1>(one) == std::get<1>(other));
+    CHECK(std::get<3>(one) == std::get<3>(other));
+  }
+  // (Cuts were made: not a comparison of nothing. The first step, the ball from z = 0 down
+  // 0.1 mm over 1.25 mm, takes at least a few mm^3.)
+  CHECK(std::get<2>(one) > 0.1);
+  CHECK(std::get<1>(one).size() > 3 * static_cast<std::size_t>(134 * 134));
 }
