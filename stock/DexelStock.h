@@ -127,6 +127,16 @@ class DexelStock : public Stock {
 
  private:
   DexelStock(const Box3& box, double spacing);
+  /// The columns materialInside asks for a swept solid (i0..i1, j0..j1; empty when i1 < i0).
+  struct ColumnBox {
+    int i0, i1, j0, j1;
+  };
+  ColumnBox insideBox(const Sweep& sweep) const;
+  /// The material of column (i, j) inside `sweep` below `top`, added to `sum` (mm, of the
+  /// column's length times its share and weight: times h^2 a volume).
+  void addInside(const Sweep& sweep, double top, int i, int j, double& sum) const;
+  /// The same for a tool part and its slim one, which lies within it (asked only inside it).
+  void addInside(const PartSweep& part, int i, int j, double& slim, double& full) const;
   std::size_t index(int i, int j) const {
     return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) +
            static_cast<std::size_t>(i);

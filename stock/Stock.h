@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 namespace engage {
@@ -27,14 +28,30 @@ struct Removal {
   double lateral = 0.0;
   long voxelsChanged = 0;  ///< cells (voxels, or rays of a dexel stock) that lost material
   long voxelsVisited = 0;  ///< cells whose distance was evaluated
+  /// For each of the step's parts (StepCut::parts), the material inside its slim and its full
+  /// swept solid after the removal, mm^3 (Stock::materialInside); the full one 0 where the
+  /// slim one is within the part's threshold and the model did not need it.
+  std::vector<std::pair<double, double>> partsMet;
 };
 
-/// One step for Stock::removeSteps: its swept solid (alive until the call returns), the
-/// step's number and duration (as remove takes them).
+/// A part of the tool that must cut nothing (a shank, a holder) over one step, asked after
+/// the step's removal for the material inside it below `top`: first the part a cell slimmer
+/// (`slim`), and where that meets more than `threshold` mm^3, the part itself (`full`).
+struct PartSweep {
+  const Sweep* slim = nullptr;
+  const Sweep* full = nullptr;
+  double top = 0.0;
+  double threshold = 0.0;
+};
+
+/// One step for Stock::removeSteps: its swept solid (alive until the call returns; none for a
+/// step known to reach no material, whose parts alone are asked), the step's number and
+/// duration (as remove takes them).
 struct StepCut {
   const Sweep* sweep = nullptr;
   int step = 0;
   double dtSeconds = 0.0;
+  std::vector<PartSweep> parts;  ///< what is asked after the step's removal
 };
 
 /// A stock model.
@@ -61,14 +78,21 @@ class Stock {
   virtual std::vector<double> materialAt(const std::vector<Eigen::Vector3d>& points) const = 0;
   /// Remove one step's swept solid; `step` and `dtSeconds` label it (for capture grids).
   virtual Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) = 0;
-  /// Remove consecutive steps in their order, nothing read from the stock between them: the
-  /// removals remove() would give one after another. A model may take them together (the
-  /// dexel stock: tiles of columns side by side, each applying the steps that reach it).
+  /// Remove consecutive steps in their order, each step's parts asked after its removal,
+  /// nothing else read from the stock between them: the removals remove() and materialInside
+  /// would give one after another. A model may take them together (the dexel stock: tiles of
+  /// columns side by side, each applying the steps that reach it).
   virtual std::vector<Removal> removeSteps(const std::vector<StepCut>& steps) {
     std::vector<Removal> out;
     out.reserve(steps.size());
-    for (const StepCut& s : steps)
-      out.push_back(remove(*s.sweep, s.step, s.dtSeconds));
+    for (const StepCut& s : steps) {
+      out.push_back(s.sweep ? remove(*s.sweep, s.step, s.dtSeconds) : Removal{});
+      for (const PartSweep& part : s.parts) {
+        const double slim = materialInside(*part.slim, part.top);
+        out.back().partsMet.emplace_back(
+            slim, slim > part.threshold ? materialInside(*part.full, part.top) : 0.0);
+      }
+    }
     return out;
   }
 };

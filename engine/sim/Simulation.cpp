@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <limits>
 #include <string>
 
@@ -291,12 +292,11 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   // Plan the steps first (for progress and for the records).
   const std::vector<Planned> plan = planSteps(path, L, options.maxSteps);
 
-  // Steps go to the stock in batches when nothing reads it between them (no shank or holder
-  // to check for contact, no cutting physics, no per-step timing): the dexel stock removes a
-  // batch tile by tile, the tiles side by side (stock/DexelStock.h), to the same numbers.
-  bool batches = !options.physics && !options.timeSteps;
-  for (const auto& [tool, parts] : slimParts)
-    batches = batches && parts.empty();
+  // Steps go to the stock in batches when nothing reads it between them but their tool's
+  // shank and holder (asked by the stock after each step's removal; no cutting physics, no
+  // per-step timing): the dexel stock removes a batch tile by tile, the tiles side by side
+  // (stock/DexelStock.h), to the same numbers.
+  const bool batches = !options.physics && !options.timeSteps;
   // A batch ends at 128 steps or at steps whose boxes hold 8192 columns of the stock's
   // resolution: small steps (CAMotics' tiger, 22 columns each) need many to give the cores
   // tiles enough, large ones (bear's ball, about 200) fewer; more held the batch's sweeps and
@@ -311,10 +311,12 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   struct Pending {
     StepPath sp;
     StepRecord r;
+    int cut = -1;          // its entry in `cuts` (none: removes nothing, asks nothing)
     bool retract = false;  // removes nothing (retractsFromCut)
+    std::vector<const ToolPart*> parts;  // the parts its entry asks about, in order
   };
   std::vector<Pending> batch;
-  std::vector<Sweep> sweeps;
+  std::deque<Sweep> sweeps;  // (a deque: the cuts point into it)
   std::vector<StepCut> cuts;
   for (std::size_t first = 0; first < plan.size();) {
     if (stopRequested()) throw Interrupted();
@@ -332,26 +334,51 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       b.r = plannedRecord(p, m, b.sp, arc);
       const AptCutter& cutter = cutters.of(m.tool);
       b.retract = retractsFromCut(plan, path, si, b.sp, cutter, stockTop);
-      if (b.retract) continue;
-      const Box3 box = sweeps.emplace_back(cutter, b.sp, h).bounds();
-      columns += ((box.max.x() - box.min.x()) / h + 1.0) * ((box.max.y() - box.min.y()) / h + 1.0);
+      StepCut c{nullptr, static_cast<int>(si), b.r.dt, {}};
+      if (!b.retract) {
+        c.sweep = &sweeps.emplace_back(cutter, b.sp, h);
+        const Box3 box = c.sweep->bounds();
+        columns +=
+            ((box.max.x() - box.min.x()) / h + 1.0) * ((box.max.y() - box.min.y()) / h + 1.0);
+      }
+      // The shank and the holder, after the cutter took its share: what they meet is a crash.
+      // Whether they meet material is asked of the part a cell slimmer: a shank as wide as its
+      // cutter grazes the wall the cutter just cut, whose cells hold fractions up to a cell's
+      // half diagonal inside the cutter's radius; how much they meet, of the part itself.
+      if (const auto parts = slimParts.find(m.tool); parts != slimParts.end())
+        for (const auto& [part, slim] : parts->second) {
+          if (std::min(b.sp.start.z(), b.sp.end.z()) + part.zOffset >= stockTop) continue;
+          StepPath raised = b.sp;
+          const Eigen::Vector3d up(0.0, 0.0, part.zOffset);
+          raised.start += up;
+          raised.end += up;
+          raised.center += up;
+          for (Eigen::Vector3d& q : raised.points)
+            q += up;
+          const Sweep& slimSweep = sweeps.emplace_back(slim, raised, h);
+          const Sweep& fullSweep = sweeps.emplace_back(part.shape, raised, h);
+          c.parts.push_back({&slimSweep, &fullSweep, stockTop, kRapidNoiseVoxels * h * h * h});
+          b.parts.push_back(&part);
+        }
+      if (c.sweep || !c.parts.empty()) {
+        b.cut = static_cast<int>(cuts.size());
+        cuts.push_back(std::move(c));
+      }
     }
-    for (std::size_t k = 0, n = 0; k < batch.size(); ++k)
-      if (!batch[k].retract)
-        cuts.push_back({&sweeps[n++], static_cast<int>(first + k), batch[k].r.dt});
     const auto stepStart = std::chrono::steady_clock::now();
     const std::vector<Removal> removals = stock.removeSteps(cuts);
     if (options.timeSteps)  // (one step a batch)
       out.stepSeconds.push_back(
           std::chrono::duration<double>(std::chrono::steady_clock::now() - stepStart).count());
-    for (std::size_t k = 0, n = 0; k < batch.size(); ++k) {
+    for (std::size_t k = 0; k < batch.size(); ++k) {
       const std::size_t si = first + k;
       const Planned& p = plan[si];
       const Move& m = path.moves[p.move];
       const StepPath& sp = batch[k].sp;
       StepRecord& r = batch[k].r;
       const AptCutter& cutter = cutters.of(m.tool);
-      const Removal rem = batch[k].retract ? Removal{} : removals[n++];
+      const Removal rem =
+          batch[k].cut >= 0 ? removals[static_cast<std::size_t>(batch[k].cut)] : Removal{};
       r.removed = rem.volume;
       r.voxelsChanged = static_cast<std::int32_t>(rem.voxelsChanged);
       r.width = rem.radialWidth;
@@ -367,26 +394,10 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
         out.rapidRemoved += r.removed;
         addCollision(out.collisions, {p.move, m.line, m.tool, "rapid", si, si, r.removed});
       }
-      // The shank and the holder, after the cutter took its share: what they meet is a crash.
-      // Whether they meet material is asked of the part a cell slimmer: a shank as wide as its
-      // cutter grazes the wall the cutter just cut, whose cells hold fractions up to a cell's
-      // half diagonal inside the cutter's radius; how much they meet, of the part itself.
-      if (const auto parts = slimParts.find(m.tool); parts != slimParts.end())
-        for (const auto& [part, slim] : parts->second) {
-          if (std::min(sp.start.z(), sp.end.z()) + part.zOffset >= stockTop) continue;
-          StepPath raised = sp;
-          const Eigen::Vector3d up(0.0, 0.0, part.zOffset);
-          raised.start += up;
-          raised.end += up;
-          raised.center += up;
-          for (Eigen::Vector3d& q : raised.points)
-            q += up;
-          if (stock.materialInside(Sweep(slim, raised, h), stockTop) <=
-              kRapidNoiseVoxels * h * h * h)
-            continue;
-          const double met = stock.materialInside(Sweep(part.shape, raised, h), stockTop);
-          addCollision(out.collisions, {p.move, m.line, m.tool, part.name, si, si, met});
-        }
+      for (std::size_t q = 0; q < batch[k].parts.size(); ++q)
+        if (rem.partsMet.at(q).first > kRapidNoiseVoxels * h * h * h)
+          addCollision(out.collisions, {p.move, m.line, m.tool, batch[k].parts[q]->name, si, si,
+                                        rem.partsMet[q].second});
       out.cuttingTime += r.dt;
 
       // Side of the curve the stock is on: concave when it lies on the outer side.

@@ -242,18 +242,31 @@ TEST_CASE(
   // their order, and each step's sums taken tile by tile in the tiles' order: one thread and
   // four, and steps one at a time or in batches, give the same bits. A 6 mm ball ramping down
   // and across at 0.3 mm (about 20 x 22 columns a step, two to four tiles) and a 10 mm flat
-  // end mill's level pass over the ramp's groove (about 35 x 36).
+  // end mill's level pass over the ramp's groove (about 35 x 36). The ball's holder (16 mm
+  // across, from 1.5 mm above the tip; a cell slimmer for the first question) is asked after
+  // each ramp step what it meets: from the 16th step it dips into the block.
   const AptCutter ball = AptCutter::ball(6.0, 18.0), flat = AptCutter::flat(10.0, 18.0);
-  std::vector<Sweep> sweeps;
+  const AptCutter holder = AptCutter::flat(16.0, 10.0), slim = AptCutter::flat(15.4, 10.0);
+  std::vector<Sweep> sweeps, holders;
   for (int k = 0; k < 24; ++k) {
     const Eigen::Vector3d p0(-15.0 + 1.2 * k, -4.0 + 0.35 * k, -0.1 * k);
-    sweeps.emplace_back(ball, line(p0, p0 + Eigen::Vector3d(1.2, 0.35, -0.1)), 0.3);
+    const Eigen::Vector3d step(1.2, 0.35, -0.1), up(0.0, 0.0, 1.5);
+    sweeps.emplace_back(ball, line(p0, p0 + step), 0.3);
+    holders.emplace_back(slim, line(p0 + up, p0 + up + step), 0.3);
+    holders.emplace_back(holder, line(p0 + up, p0 + up + step), 0.3);
   }
+  // The holder's question for step n (none for the flat end mill's steps).
+  const double threshold = 0.5 * 0.3 * 0.3 * 0.3;
+  auto parts = [&](std::size_t n) {
+    return n < 24 ? std::vector<PartSweep>{{&holders[2 * n], &holders[2 * n + 1], 0.0, threshold}}
+                  : std::vector<PartSweep>{};
+  };
   for (int k = 0; k < 8; ++k) {
     const Eigen::Vector3d p0(-14.0 + 3.5 * k, 1.0, -1.0);
     sweeps.emplace_back(flat, line(p0, p0 + Eigen::Vector3d(3.5, 0.0, 0.0)), 0.3);
   }
-  // batch 0: remove() step by step; else removeSteps() in batches of that many steps.
+  // batch 0: remove() and materialInside step by step; else removeSteps() in batches of that
+  // many steps.
   auto removeAll = [&](std::size_t batch) {
     DexelStock s = DexelStock::box(block(20.0, 6.0), 0.3);
     s.captureRemoved(true);
@@ -261,19 +274,25 @@ TEST_CASE(
     for (std::size_t k = 0; k < sweeps.size(); k += std::max<std::size_t>(batch, 1)) {
       if (batch == 0) {
         steps.push_back(s.remove(sweeps[k], static_cast<int>(k), 0.1));
+        for (const PartSweep& part : parts(k))
+          steps.back().partsMet.emplace_back(s.materialInside(*part.slim, part.top),
+                                             s.materialInside(*part.full, part.top));
         continue;
       }
       std::vector<StepCut> cuts;
       for (std::size_t n = k; n < std::min(sweeps.size(), k + batch); ++n)
-        cuts.push_back({&sweeps[n], static_cast<int>(n), 0.1});
+        cuts.push_back({&sweeps[n], static_cast<int>(n), 0.1, parts(n)});
       for (const Removal& r : s.removeSteps(cuts))
         steps.push_back(r);
     }
-    std::vector<double> numbers;  // every field of every step's removal
-    for (const Removal& r : steps)
+    std::vector<double> numbers, met;  // every field of every step's removal; the holder's
+    for (const Removal& r : steps) {
       numbers.insert(numbers.end(),
                      {r.volume, r.axialDepth, r.radialWidth, r.top, r.engagementRad, r.lateral,
                       static_cast<double>(r.voxelsChanged), static_cast<double>(r.voxelsVisited)});
+      for (const auto& [slimMet, fullMet] : r.partsMet)
+        met.insert(met.end(), {slimMet, slimMet > threshold ? fullMet : 0.0});
+    }
     std::vector<double> rest;  // what every ray holds after, and what it lost, when
     for (int j = 0; j < s.raysY(); ++j)
       for (int i = 0; i < s.raysX(); ++i) {
@@ -283,21 +302,33 @@ TEST_CASE(
           for (const DexelStock::Lost& cell : c->cells)
             rest.insert(rest.end(), {static_cast<double>(cell.share), 1.0 * cell.step});
       }
-    return std::make_tuple(numbers, rest, steps.front().volume, s.stepMrr());
+    return std::make_tuple(numbers, rest, steps.front().volume, s.stepMrr(), met);
   };
   // In an arena of one thread the tiles go one after another; of four, side by side.
   auto run = [&](int threads, std::size_t batch) {
     return tbb::task_arena(threads).execute([&] { return removeAll(batch); });
   };
-  const auto one = run(1, 0);
+  const auto one = run(1, 1);
   for (const auto& [threads, batch] :
-       {std::pair<int, std::size_t>{4, 0}, {1, 32}, {4, 32}, {4, 5}}) {
+       {std::pair<int, std::size_t>{4, 1}, {1, 32}, {4, 32}, {4, 5}, {4, 0}}) {
     INFO(threads << " threads, batches of " << batch << " steps");
     const auto other = run(threads, batch);
     CHECK(std::get<0>(one) == std::get<0>(other));  // bit for bit
     CHECK(std::get<1>(one) == std::get<1>(other));
     CHECK(std::get<3>(one) == std::get<3>(other));
+    // What the holder meets: summed tile by tile in a batch, over the whole box at once by
+    // materialInside: the same to rounding.
+    const auto& a = std::get<4>(one);
+    const auto& b = std::get<4>(other);
+    REQUIRE(a.size() == b.size());
+    for (std::size_t k = 0; k < a.size(); ++k)
+      CHECK(b[k] == Approx(a[k]).epsilon(1e-12).margin(1e-12));
   }
+  // (The holder meets material, far beyond its threshold, in the ramp's last steps: at the
+  // last its face is 0.8-0.9 mm into the block, a 16 mm disc moving 1.25 mm: 0.8 x (201 + 20)
+  // = 177 mm^3 at least, less the ball's groove under it, at most 6 mm x 0.9 mm x 17.3 mm =
+  // 93 mm^3: more than 80 mm^3.)
+  CHECK(std::get<4>(one).back() > 80.0);
   // (Cuts were made: not a comparison of nothing. The first step, the ball from z = 0 down
   // 0.1 mm over 1.25 mm, takes at least a few mm^3.)
   CHECK(std::get<2>(one) > 0.1);
