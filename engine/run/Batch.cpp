@@ -180,13 +180,10 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     const RunResult& out = run.result;
     const WrittenOutputs& written = run.written;
     const SimulationResult& sim = out.sim;
-    double peak = 0.0;
-    int peakLine = 0;
-    for (const StepRecord& s : sim.steps)
-      if (s.mrr > peak) {
-        peak = s.mrr;
-        peakLine = s.line;
-      }
+    // The run's peak (RunResult::peakStep: the first step at it), as summary.json has it.
+    const bool cut = !sim.steps.empty() && sim.steps[out.peakStep].mrr > 0.0;
+    const double peak = cut ? sim.steps[out.peakStep].mrr : 0.0;
+    const int peakLine = cut ? sim.steps[out.peakStep].line : 0;
     r["status"] = "ok";
     r["error"] = nullptr;
     r["moves"] = out.job.path.moves.size();

@@ -140,8 +140,11 @@ RunResult executeRun(PreparedRun run, const ProgressFunction& progress) {
     r.plan = scheduleFeeds(job.path, r.sim, job.schedule);
     r.refed = writeProgram(readFile(job.mainProgram()), job.path, r.plan.plan);
   }
+  // The first step at the peak: a later one counts as higher only beyond rounding (a slot's
+  // steps on two lines took the same MRR to the last bits, and which of them was "higher"
+  // changed with the order the stock summed its columns in).
   for (std::size_t i = 0; i < r.sim.steps.size(); ++i)
-    if (r.sim.steps[i].mrr > r.sim.steps[r.peakStep].mrr) r.peakStep = i;
+    if (r.sim.steps[i].mrr > r.sim.steps[r.peakStep].mrr * (1.0 + kSamePeak)) r.peakStep = i;
   return r;
 }
 

@@ -40,6 +40,10 @@ struct PreparedRun {
 /// Called now and then with (steps done, steps in all).
 using ProgressFunction = std::function<void(std::size_t, std::size_t)>;
 
+/// Rates within this share of each other are the same where a peak's step is chosen: the first
+/// step at the peak is reported, not one that rounding in the stock's sums put a few ulps higher.
+constexpr double kSamePeak = 1e-9;
+
 /// Everything a run made.
 struct RunResult {
   Job job;
@@ -49,7 +53,7 @@ struct RunResult {
   CrossCheck cross;          ///< when crossChecked
   Schedule plan;             ///< empty unless the job schedules
   std::string refed;         ///< the re-fed program text (schedule jobs)
-  std::size_t peakStep = 0;  ///< the step of the highest measured MRR (0 when none)
+  std::size_t peakStep = 0;  ///< the first step of the highest measured MRR (0 when none)
 };
 
 /// The memory a run of `job` may come to hold, bytes, for a batch to decide how many jobs run

@@ -208,7 +208,7 @@ std::map<int, ToolTotals> toolTotals(const RunResult& result) {
     if (std::isfinite(s.removed)) t.removed += s.removed;
     t.time += s.dt;
     const double load = result.stock ? s.mrr : s.mrrExact;
-    if (std::isfinite(load) && load > t.peak) {
+    if (std::isfinite(load) && load > t.peak * (1.0 + kSamePeak)) {  // (the first, as peakStep)
       t.peak = load;
       t.peakStep = i;
     }
