@@ -791,18 +791,9 @@ DexelStock::ColumnBox DexelStock::insideBox(const Sweep& sweep) const {
 
 void DexelStock::addInside(const Sweep& sweep, double top, int i, int j, double& sum) const {
   const Box3 sb = sweep.bounds();
-  const double zTop = std::min(top, sb.max.z());
-  const double x = x0_ + (i + 0.5) * h_, y = y0_ + (j + 0.5) * h_;
-  for (const Interval& piece : rays_[index(i, j)]) {
-    const double a = std::max(piece.z0, sb.min.z()), b = std::min(piece.z1, zTop);
-    // Pieces of the interval about h long, each in or out by its middle.
-    const int n = static_cast<int>(std::ceil((b - a) / h_));
-    for (int k = 0; k < n; ++k) {
-      const double z0 = a + (b - a) * k / n, z1 = a + (b - a) * (k + 1) / n;
-      if (sweep.signedDistance({x, y, 0.5 * (z0 + z1)}) < 0.0)
-        sum += piece.f * weight_[index(i, j)] * (z1 - z0);
-    }
-  }
+  forPieces(i, j, sb.min.z(), std::min(top, sb.max.z()), [&](const Eigen::Vector3d& p, double v) {
+    if (sweep.signedDistance(p) < 0.0) sum += v;
+  });
 }
 
 void DexelStock::addInside(const PartSweep& part, int i, int j, double& slim, double& full) const {
@@ -816,21 +807,12 @@ void DexelStock::addInside(const PartSweep& part, int i, int j, double& slim, do
   // one, asked only inside it: where nothing is met the check costs what the slim part's alone
   // did (asking it within half a cell of the full one too: a 1 mm ball's shank active on every
   // step of the finishing raster, one core, 6 % longer than the slim part alone).
-  const double zTop = std::min(part.top, fb.max.z());
-  const double x = x0_ + (i + 0.5) * h_, y = y0_ + (j + 0.5) * h_;
-  for (const Interval& piece : rays_[index(i, j)]) {
-    const double a = std::max(piece.z0, fb.min.z()), b = std::min(piece.z1, zTop);
-    const int n = static_cast<int>(std::ceil((b - a) / h_));
-    for (int k = 0; k < n; ++k) {
-      const double z0 = a + (b - a) * k / n, z1 = a + (b - a) * (k + 1) / n;
-      const Eigen::Vector3d p(x, y, 0.5 * (z0 + z1));
-      const double d = part.full->signedDistance(p);
-      const double v = piece.f * weight_[index(i, j)] * (z1 - z0);
-      if (!(d < 0.0)) continue;
-      full += v;
-      if (part.slim->signedDistance(p) < 0.0) slim += v;
-    }
-  }
+  forPieces(i, j, fb.min.z(), std::min(part.top, fb.max.z()),
+            [&](const Eigen::Vector3d& p, double v) {
+              if (!(part.full->signedDistance(p) < 0.0)) return;
+              full += v;
+              if (part.slim->signedDistance(p) < 0.0) slim += v;
+            });
 }
 
 double DexelStock::materialInside(const Sweep& sweep, double top) const {

@@ -137,6 +137,20 @@ class DexelStock : public Stock {
   void addInside(const Sweep& sweep, double top, int i, int j, double& sum) const;
   /// The same for a tool part and its slim one, which lies within it (asked only inside it).
   void addInside(const PartSweep& part, int i, int j, double& slim, double& full) const;
+  /// fn(p, v) for the pieces of column (i, j)'s material in [zLow, zHigh], each about h long
+  /// and in or out by its middle p: v its material (length times share and weight, mm).
+  template <typename Fn>
+  void forPieces(int i, int j, double zLow, double zHigh, Fn&& fn) const {
+    const double x = x0_ + (i + 0.5) * h_, y = y0_ + (j + 0.5) * h_;
+    for (const Interval& piece : rays_[index(i, j)]) {
+      const double a = std::max(piece.z0, zLow), b = std::min(piece.z1, zHigh);
+      const int n = static_cast<int>(std::ceil((b - a) / h_));
+      for (int k = 0; k < n; ++k) {
+        const double z0 = a + (b - a) * k / n, z1 = a + (b - a) * (k + 1) / n;
+        fn(Eigen::Vector3d(x, y, 0.5 * (z0 + z1)), piece.f * weight_[index(i, j)] * (z1 - z0));
+      }
+    }
+  }
   std::size_t index(int i, int j) const {
     return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) +
            static_cast<std::size_t>(i);

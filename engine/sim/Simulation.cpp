@@ -311,8 +311,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   struct Pending {
     StepPath sp;
     StepRecord r;
-    int cut = -1;          // its entry in `cuts` (none: removes nothing, asks nothing)
-    bool retract = false;  // removes nothing (retractsFromCut)
+    int cut = -1;  // its entry in `cuts` (none: removes nothing, asks nothing)
     std::vector<const ToolPart*> parts;  // the parts its entry asks about, in order
   };
   std::vector<Pending> batch;
@@ -333,9 +332,8 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       b.sp = stepPath(m, p.t0, p.t1);
       b.r = plannedRecord(p, m, b.sp, arc);
       const AptCutter& cutter = cutters.of(m.tool);
-      b.retract = retractsFromCut(plan, path, si, b.sp, cutter, stockTop);
       StepCut c{nullptr, static_cast<int>(si), b.r.dt, {}};
-      if (!b.retract) {
+      if (!retractsFromCut(plan, path, si, b.sp, cutter, stockTop)) {  // (else removes nothing)
         c.sweep = &sweeps.emplace_back(cutter, b.sp, h);
         const Box3 box = c.sweep->bounds();
         columns +=
