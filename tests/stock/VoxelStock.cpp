@@ -202,6 +202,41 @@ TEST_CASE("plunge and ramp against their closed forms", "[stock]") {
   }
 }
 
+TEST_CASE("a top face skimmed 0.01 mm deep, then along the same track 0.01 mm deeper", "[stock]") {
+  // A flat end mill plunges 0.01 mm into the top face and skims 49.5 mm at 30 deg to the
+  // grid, then does the same 0.01 mm deeper: each pass takes the track, a rectangle 2 r wide
+  // and its two half discs, 0.01 mm deep. The second pass's rim meets the first one's face,
+  // floor and wall in one voxel: it must keep the wall that neither pass reaches. (It had
+  // kept the two floors instead, losing the face's material beside the track.)
+  const AptCutter c = AptCutter::flat(6.0, 18.0);
+  const double h = 6.0 / 20.0;
+  const double L = 2.5 * h;
+  const double length = 66 * L;
+  const double expected = (6.0 * length + kPi * 9.0) * 0.01;
+  // The track's offset across the grid and the face's height in its voxel (0: its centre).
+  for (const auto& [offset, top] :
+       {std::pair{0.0, 0.0}, std::pair{0.1, 0.0}, std::pair{0.0, 0.14}, std::pair{0.23, 0.07}}) {
+    INFO("offset " << offset << " mm, face at z = " << top << " mm");
+    Box3 b;
+    b.min = {0.0, -30.0, -10.0};
+    b.max = {60.0, 30.0, top};
+    VoxelStock s = VoxelStock::box(b, h);
+    auto skim = [&](double depth) {
+      const Eigen::Vector3d a(8.0, offset - 15.0, top - depth);
+      double v = s.remove(Sweep(c, line(a + Eigen::Vector3d::UnitZ(), a), h)).volume;
+      for (int k = 0; k < 66; ++k)
+        v += s.remove(Sweep(c, line(a + k * L * kDir, a + (k + 1) * L * kDir), h)).volume;
+      return v;
+    };
+    const double first = skim(0.01);
+    const double second = skim(0.02);
+    // Measured: both passes +0.007 % at every placement (the old pair: the second +0.18 to
+    // +0.33 %); 0.05 % is a tenth of the bound for a move.
+    CHECK(first == Approx(expected).epsilon(0.0005));
+    CHECK(second == Approx(expected).epsilon(0.0005));
+  }
+}
+
 TEST_CASE("helical bore: every step after the first turns the same volume", "[stock]") {
   // The closed form of helixSteadyStep (tests/stock/StockTestSupport.h).
   const double h = 6.0 / 20.0, L = 2.5 * h, Rh = 1.2, p = 1.0;
