@@ -496,9 +496,9 @@ class NearestPair {
       offered_[static_cast<std::size_t>(count_++)] = c;
     if (best_.share < 0.0 || std::abs(c.share - left_) < std::abs(best_.share - left_)) best_ = c;
   }
-  /// Of the pairs offered, the nearest that loses at most `tolerance` of the cube
-  /// (lost(q, united, outer): the material the pair would not hold); false, keeping the
-  /// nearest, when none does.
+  /// Of the pairs offered (the first kMostOffered: cutCorner offers at most seven), the nearest
+  /// that loses at most `tolerance` of the cube (lost(q, united, outer): the material the pair
+  /// would not hold); false, keeping the nearest, when none does.
   template <typename Lost>
   bool keepingAll(Lost&& lost, double tolerance) {
     std::array<int, kMostOffered> order{};
