@@ -419,6 +419,18 @@ double materialShare(const HalfSpace q[2], bool united, const HalfSpace* extra, 
   return v;
 }
 
+/// A partial voxel's material as its planes tell: inside both planes q (or with `united`
+/// inside either, and inside `outer`), which hold the share `held` of the cube (NaN until
+/// clipped).
+struct StoredMaterial {
+  HalfSpace q[2];
+  int made[2] = {kStockFace, kStockFace};
+  double held = std::numeric_limits<double>::quiet_NaN();
+  bool united = false;
+  HalfSpace outer;
+  int madeOuter = kStockFace;
+};
+
 /// Share of the cube inside all `fixed` half-spaces and, for each clause, inside either of its
 /// two sides (a side: inside all of its one or two half-spaces), by inclusion-exclusion clause
 /// by clause: |X n (A u B)| = |X n A| + |X n B| - |X n A n B|.
@@ -443,29 +455,28 @@ double clausesShare(std::array<HalfSpace, 9>& fixed, int n, const Clause* clause
          with(clauses[0].a, &clauses[0].b);
 }
 
-/// Share of the cube that an inside corner (inside either of q, within `outer`) keeps outside
-/// a cut (inside both of its `faces` faces) and that the pair `kept` (inside both of its
-/// planes, or with `keptUnited` inside either and within `keptOuter`) does not hold: the
-/// material that keeping that pair would lose. (At most eight planes in any term.)
-double lostShare(const HalfSpace q[2], const HalfSpace& outer, const HalfSpace cut[2], int faces,
-                 const HalfSpace kept[2], bool keptUnited, const HalfSpace& keptOuter) {
+/// Share of the cube that an inside corner `old` (united) keeps outside a cut (inside both of
+/// its `faces` faces) and that `kept` does not hold: the material that keeping those planes
+/// would lose. (At most eight planes in any term.)
+double lostShare(const StoredMaterial& old, const HalfSpace cut[2], int faces,
+                 const StoredMaterial& kept) {
   std::array<HalfSpace, 9> fixed;
   int n = 0;
   Clause clauses[3];
   int count = 0;
-  fixed[static_cast<std::size_t>(n++)] = outer;
-  clauses[count++] = Clause{Side{{q[0], {}}, 1}, Side{{q[1], {}}, 1}};
+  fixed[static_cast<std::size_t>(n++)] = old.outer;
+  clauses[count++] = Clause{Side{{old.q[0], {}}, 1}, Side{{old.q[1], {}}, 1}};
   if (faces == 2)
     clauses[count++] =
         Clause{Side{{cut[0].complement(), {}}, 1}, Side{{cut[1].complement(), {}}, 1}};
   else
     fixed[static_cast<std::size_t>(n++)] = cut[0].complement();
-  const Side neither{{kept[0].complement(), kept[1].complement()}, 2};
-  if (!keptUnited)
+  const Side neither{{kept.q[0].complement(), kept.q[1].complement()}, 2};
+  if (!kept.united)
     clauses[count++] =
-        Clause{Side{{kept[0].complement(), {}}, 1}, Side{{kept[1].complement(), {}}, 1}};
-  else if (keptOuter.n.squaredNorm() > 0.0)
-    clauses[count++] = Clause{Side{{keptOuter.complement(), {}}, 1}, neither};
+        Clause{Side{{kept.q[0].complement(), {}}, 1}, Side{{kept.q[1].complement(), {}}, 1}};
+  else if (kept.outer.n.squaredNorm() > 0.0)
+    clauses[count++] = Clause{Side{{kept.outer.complement(), {}}, 1}, neither};
   else
     for (const HalfSpace& p : neither.p)
       fixed[static_cast<std::size_t>(n++)] = p;
@@ -482,8 +493,8 @@ class NearestPair {
   void offer(const HalfSpace& a, int madeA, const HalfSpace& b, int madeB, bool united,
              const HalfSpace& outer = HalfSpace{}, int madeOuter = kStockFace) {
     const HalfSpace pair[2] = {a, b};
-    Pair c;
-    c.share =
+    StoredMaterial c;
+    c.held =
         united ? materialShare(pair, true, nullptr, 0, nullptr, &outer) : cubeFraction(pair, 2);
     c.q[0] = a;
     c.q[1] = b;
@@ -492,26 +503,27 @@ class NearestPair {
     c.united = united;
     c.outer = united ? outer : HalfSpace{};
     c.madeOuter = madeOuter;
+    if (!any() || std::abs(c.held - left_) < std::abs(best_.held - left_)) best_ = c;
     if (count_ < static_cast<int>(offered_.size()))
       offered_[static_cast<std::size_t>(count_++)] = c;
-    if (best_.share < 0.0 || std::abs(c.share - left_) < std::abs(best_.share - left_)) best_ = c;
   }
   /// Of the pairs offered (the first kMostOffered: cutCorner offers at most seven), the nearest
-  /// that loses at most `tolerance` of the cube (lost(q, united, outer): the material the pair
-  /// would not hold); false, keeping the nearest, when none does.
+  /// that loses at most `tolerance` of the cube (lost(pair): the material the pair would not
+  /// hold); false, keeping the nearest, when none does.
   template <typename Lost>
   bool keepingAll(Lost&& lost, double tolerance) {
     std::array<int, kMostOffered> order{};
     for (int i = 0; i < count_; ++i)
       order[static_cast<std::size_t>(i)] = i;
     auto distance = [&](int i) {
-      return std::abs(offered_[static_cast<std::size_t>(i)].share - left_);
+      return std::abs(offered_[static_cast<std::size_t>(i)].held - left_);
     };
     std::stable_sort(order.begin(), order.begin() + count_,
                      [&](int x, int y) { return distance(x) < distance(y); });
     for (int i = 0; i < count_; ++i) {
-      const Pair& c = offered_[static_cast<std::size_t>(order[static_cast<std::size_t>(i)])];
-      if (lost(c.q, c.united, c.outer) <= tolerance) {
+      const StoredMaterial& c =
+          offered_[static_cast<std::size_t>(order[static_cast<std::size_t>(i)])];
+      if (lost(c) <= tolerance) {
         best_ = c;
         return true;
       }
@@ -519,30 +531,20 @@ class NearestPair {
     return false;
   }
   /// Whether an offered pair holds what the cut left to within `tolerance`.
-  bool within(double tolerance) const {
-    return best_.share >= 0.0 && std::abs(best_.share - left_) <= tolerance;
-  }
+  bool within(double tolerance) const { return any() && std::abs(best_.held - left_) <= tolerance; }
   /// Whether any pair was offered.
-  bool any() const { return best_.share >= 0.0; }
+  bool any() const { return count_ > 0; }
   /// Stores the chosen pair as the voxel's planes.
   void store(LeafPlanes& planes, openvdb::Index offset) const {
-    planes.set(offset, best_.q[0], best_.made[0], best_.q[1], best_.made[1], best_.share,
+    planes.set(offset, best_.q[0], best_.made[0], best_.q[1], best_.made[1], best_.held,
                best_.united, best_.outer, best_.madeOuter);
   }
 
  private:
   static constexpr int kMostOffered = 8;
-  struct Pair {
-    HalfSpace q[2];
-    int made[2] = {0, 0};
-    bool united = false;
-    HalfSpace outer;
-    int madeOuter = kStockFace;
-    double share = -1.0;
-  };
   double left_;
-  Pair best_;
-  std::array<Pair, kMostOffered> offered_;
+  StoredMaterial best_;  // the nearest pair, its share of the cube as `held`
+  std::array<StoredMaterial, kMostOffered> offered_;
   int count_ = 0;
 };
 
@@ -562,18 +564,6 @@ void keepRestOfCut(LeafPlanes& planes, openvdb::Index offset, const HalfSpace cu
   else
     planes.set(offset, outer, madeOuter, kept(), serial, share);
 }
-
-/// A partial voxel's material as its planes tell: inside both planes q (or with `united`
-/// inside either, and inside `outer`), which hold the share `held` of the cube (NaN until
-/// clipped).
-struct StoredMaterial {
-  HalfSpace q[2];
-  int made[2] = {kStockFace, kStockFace};
-  double held = std::numeric_limits<double>::quiet_NaN();
-  bool united = false;
-  HalfSpace outer;
-  int madeOuter = kStockFace;
-};
 
 /// remaining() for a voxel whose material m is inside either of its planes (an inside
 /// corner: the floor and wall a flat bottom's rim left), within its outer plane.
@@ -647,10 +637,7 @@ double cutCorner(const Sweep& sweep, const Eigen::Vector3d& p, double h, double 
   // it for good, as what this pass's later steps leave is taken within the pair's planes (see
   // the file's header).
   const bool keepsAll = best.keepingAll(
-      [&](const HalfSpace kq[2], bool kUnited, const HalfSpace& kOuter) {
-        return lostShare(q, m.outer, cut, faces, kq, kUnited, kOuter);
-      },
-      kLostNoise);
+      [&](const StoredMaterial& pair) { return lostShare(m, cut, faces, pair); }, kLostNoise);
   if (faces == 2 && !keepsAll && !best.within(kPairNear)) {
     // No pair holds what is left: the front of a deeper pass crossing floor and wall leaves
     // four planes' material for a step (the old wall and floor less the new floor behind the
