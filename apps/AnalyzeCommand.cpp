@@ -28,7 +28,7 @@ void addAnalyzeCommand(CLI::App& app, std::function<int()>& run) {
   cmd->add_option("--transition", o->transition,
                   "arc length over which the adaptive feed changes (Eq 24 acceleration)");
   cmd->add_option("--units", o->units, "report units: mm or in (default: those you typed)")
-      ->check(CLI::IsMember({"mm", "in"}));
+      ->check(CLI::IsMember({"mm", "in", "inch"}));
   cmd->add_flag("--json", o->json, "print one JSON object");
   auto* sweep = cmd->add_flag("--sweep-radius", o->sweep,
                               "print the paper's Fig 8 table as CSV: MRR against R/D for r_tc/D "

@@ -5,10 +5,59 @@
 namespace engage::app {
 namespace {
 
+/// What the help shows as an option's value: its kind, its dimension or its choices.
+std::string typeName(const OptionInfo& o) {
+  switch (o.kind) {
+    case OptionKind::Choice: {
+      std::string s;
+      for (const std::string& c : o.choices)
+        s += (s.empty() ? "" : "|") + c;
+      return s;
+    }
+    case OptionKind::Count:
+      return "INT";
+    case OptionKind::Fraction:
+      return "NUMBER";
+    case OptionKind::Flag:
+      return "";
+    case OptionKind::Text:
+      return "TEXT";
+    case OptionKind::Quantity:
+      break;
+  }
+  switch (o.dimension) {
+    case Dimension::Length:
+      return "LENGTH";
+    case Dimension::Angle:
+      return "ANGLE";
+    case Dimension::Feed:
+      return "FEED";
+    case Dimension::VolumeRate:
+      return "RATE";
+    case Dimension::Acceleration:
+      return "ACCEL";
+    case Dimension::Jerk:
+      return "JERK";
+    case Dimension::SpindleSpeed:
+      return "SPEED";
+    case Dimension::SpecificEnergy:
+      return "ENERGY";
+    case Dimension::Force:
+      return "FORCE";
+    case Dimension::Torque:
+      return "TORQUE";
+    case Dimension::Power:
+      return "POWER";
+    default:
+      return "QUANTITY";
+  }
+}
+
 /// The CLI11 side of one table entry bound to `target`. Values are checked by makeJob, the
 /// one validation of all front ends, so that its messages are the same everywhere.
 CLI::Option* addOption(CLI::App& cmd, const OptionInfo& o, std::string& target) {
   CLI::Option* opt = cmd.add_option("--" + o.name, target, o.help);
+  opt->type_name(typeName(o));
   if (!o.defaultText.empty()) opt->capture_default_str();
   return opt;
 }
@@ -46,12 +95,12 @@ void addToolOptions(CLI::App& cmd, ToolOptions& t, bool required) {
         o.name == "stickout" || o.name == "holder")
       continue;
     if (o.name == "flutes") {
-      cmd.add_option("--flutes", t.flutes, o.help)->capture_default_str();
+      cmd.add_option("--flutes", t.flutes, o.help)->type_name(typeName(o))->capture_default_str();
       continue;
     }
     CLI::Option* opt = addOption(cmd, o, *fields.at(o.name));
     // analyze reads the cutter without makeJob: CLI11 checks the choices there.
-    if (o.kind == OptionKind::Choice) opt->check(CLI::IsMember(o.choices));
+    if (o.kind == OptionKind::Choice) opt->type_name("NAME")->check(CLI::IsMember(o.choices));
     if (required && o.required) opt->required();
   }
 }

@@ -23,7 +23,7 @@ struct MovesOptions {
 int runMoves(const MovesOptions& o) {
   ReaderOptions reader;
   reader.toolTable = o.toolTable;
-  reader.toolTableInch = o.toolTableUnits == "in";
+  reader.toolTableInch = o.toolTableUnits != "mm";  // "in" or "inch"
   reader.blockDelete = o.blockDelete;
   reader.dialect = dialectOf(o.dialect);
   if (!o.machine.empty()) reader.machine = readMachine(o.machine);
@@ -43,7 +43,7 @@ void addMovesCommand(CLI::App& app, std::function<int()>& run) {
   cmd->add_option("program", o->program, "G-code program (.ngc, .nc, .tap, .gcode)")->required();
   cmd->add_option("--tool-table", o->toolTable, "LinuxCNC tool table for G43");
   cmd->add_option("--tool-table-units", o->toolTableUnits, "units of the tool table: mm or in")
-      ->check(CLI::IsMember({"mm", "in"}))
+      ->check(CLI::IsMember({"mm", "in", "inch"}))
       ->capture_default_str();
   cmd->add_flag("--block-delete", o->blockDelete, "skip lines starting with '/'");
   cmd->add_option("--dialect", o->dialect, "the controller: linuxcnc, fanuc or grbl")

@@ -27,7 +27,7 @@ void addPocketCommand(CLI::App& app, std::function<int()>& run) {
   cmd->add_option("--plunge-feed", o->plungeFeed, "feed of the entries (default: half --feed)");
   cmd->add_option("--tolerance", o->tolerance, "arc fitting tolerance (default 0.002 mm)");
   cmd->add_option("--units", o->units, "program units: mm or in (default: the boundary's)")
-      ->check(CLI::IsMember({"mm", "in"}));
+      ->check(CLI::IsMember({"mm", "in", "inch"}));
   cmd->add_flag("--conventional", o->conventional,
                 "conventional instead of climb milling (M3 spindle)");
   cmd->callback([o, &run] {

@@ -29,9 +29,10 @@ void addCommand(CLI::App& app, std::function<int()>& run, JobCommand command, co
 }  // namespace
 
 void addSimulateCommand(CLI::App& app, std::function<int()>& run) {
-  addCommand(app, run, JobCommand::Simulate,
-             "sweep the cutter through a voxel stock step by step: measured removal and "
-             "engagement beside the analytic model");
+  addCommand(
+      app, run, JobCommand::Simulate,
+      "sweep the cutter through the stock (dexel or voxel) step by step: measured removal and "
+      "engagement beside the analytic model");
   addCommand(app, run, JobCommand::Schedule,
              "simulate, then re-feed the program to hold the MRR at a target within the "
              "machine's feed and acceleration limits");

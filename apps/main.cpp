@@ -14,6 +14,7 @@
 #include "apps/PocketCommand.h"
 #include "apps/SimulateCommand.h"
 #include "cutters/Error.h"
+#include "engine/paths/DataDirectory.h"
 #include "engine/sim/Simulation.h"
 
 #include <CLI/CLI.hpp>
@@ -26,6 +27,7 @@
 #include <exception>
 #include <functional>
 #include <iostream>
+#include <string>
 
 namespace {
 
@@ -38,8 +40,8 @@ extern "C" void onStopSignal(int sig) {
 /// Gives back the pages of a shared library's first read-only segment (its ELF header, symbol
 /// names, hash table and relocations), which the dynamic loader read while it relocated the
 /// library before main. OpenVDB's symbol names alone are 22 MB, and relocating its 52,000
-/// symbol references touched nearly all of them: 26 MB of the process's 35 MB at start, and
-/// of its peak resident set (CAMotics' tiger: 26 of 110 MiB). The pages are clean copies of
+/// symbol references touches nearly all of them: 26 MB of the process's 35 MB at start, held
+/// through the run otherwise. The pages are clean copies of
 /// the file, never written (the segment is mapped read-only), so a later lookup (a lazily
 /// bound call) reads its page again from the page cache.
 int releaseLoaderTables(dl_phdr_info* info, size_t, void*) {
@@ -64,6 +66,34 @@ int releaseLoaderTables(dl_phdr_info* info, size_t, void*) {
   return 0;
 }
 
+/// CLI11's message of a usage error in plain words where its own are terse: an option given
+/// more often than once ("--stock: At Most 1 required but received 2").
+std::string usageMessage(const CLI::ParseError& e) {
+  const std::string m = e.what();
+  const std::string atMost = ": At Most 1 required but received ";
+  const std::size_t at = m.find(atMost);
+  if (at != std::string::npos)
+    return m.substr(0, at) + " is given " + m.substr(at + atMost.size()) + " times: give it once";
+  return m;
+}
+
+/// `engage --version`: the version and the data folder this engage uses (DataDirectory.h).
+std::string versionText() {
+  std::string data;
+  try {
+    data = engage::dataDirectory();
+  } catch (const engage::Error&) {
+    data = "none found: set ENGAGE_DATA";
+  }
+  return "engage 0.1.0 (data: " + data + ")";
+}
+
+/// The exit statuses, shown at the end of every command's help.
+constexpr const char* kExitStatuses =
+    "Exit status: 0 success; 1 invalid input (one line on stderr, nothing written); 2 usage; "
+    "3 internal error; 4 a batch ran but some of its jobs failed; 5 the run completed but a "
+    "rapid, a shank or a holder met material; 130 interrupted.\n";
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -72,7 +102,7 @@ int main(int argc, char** argv) {
       "engage: material-engagement simulator and adaptive feedrate scheduler for CNC "
       "milling"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "engage 0.1.0");
+  app.set_version_flag("--version", versionText());
   std::function<int()> run;
   engage::app::addAnalyzeCommand(app, run);
   engage::app::addMovesCommand(app, run);
@@ -80,11 +110,18 @@ int main(int argc, char** argv) {
   engage::app::addPocketCommand(app, run);
   engage::app::addPaperCommand(app, run);
   engage::app::addBatchCommands(app, run);
+  app.footer(kExitStatuses);
+  for (CLI::App* sub : app.get_subcommands({}))
+    sub->footer(kExitStatuses);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    // --help and --version exit 0; every other usage error exits 2 with CLI11's message.
-    return app.exit(e) == 0 ? 0 : 2;
+    // --help and --version print and exit 0; every other usage error is one line and exit 2.
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::cerr << "engage: usage: " << usageMessage(e) << " (see engage"
+              << (argc > 1 && argv[1][0] != '-' ? std::string(" ") + argv[1] : std::string())
+              << " --help)\n";
+    return 2;
   }
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);

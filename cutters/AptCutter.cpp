@@ -1,6 +1,7 @@
 #include "cutters/AptCutter.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "cutters/Tolerances.h"
 
 #include <algorithm>
@@ -12,25 +13,16 @@
 namespace engage {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegPerRad = 180.0 / kPi;
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
 std::string mm(const char* name, double v) {
-  return std::string(name) + " = " + num(v) + " mm";
+  return std::string(name) + " = " + formatNumber(v) + " mm";
 }
 std::string deg(const char* name, double rad) {
-  return std::string(name) + " = " + num(rad * kDegPerRad) + " deg";
+  return std::string(name) + " = " + formatNumber(rad * kDegPerRad) + " deg";
 }
 
 void requireFinite(const char* name, double v) {
   if (!std::isfinite(v))
-    throw ParameterError(std::string(name) + " = " + num(v) + " is not a finite number");
+    throw ParameterError(std::string(name) + " = " + formatNumber(v) + " is not a finite number");
 }
 
 double distanceToSegment(const ProfileSegment& s, const Eigen::Vector2d& q) {
@@ -159,7 +151,7 @@ AptCutter AptCutter::chamfer(double diameter, double includedAngleRad, double fl
   p.height = fluteLength;
   if (std::isfinite(fluteLength) && fluteLength < p.cornerCenterHeight)
     throw ParameterError(mm("flute length h", fluteLength) + " must reach the top of the cone at " +
-                         num(p.cornerCenterHeight) + " mm for a chamfer mill of " +
+                         formatNumber(p.cornerCenterHeight) + " mm for a chamfer mill of " +
                          mm("diameter D", diameter));
   return fromApt(p, flutes, CutterShape::Chamfer);
 }
@@ -181,9 +173,9 @@ AptCutter AptCutter::fromApt(const AptParameters& p, int flutes, CutterShape sha
   const double impliedE = std::max(0.0, p.radius - p.cornerRadius);
   if (std::abs(p.cornerCenterRadial - impliedE) >
       tol::kParameterRelative * p.radius + tol::kLengthMm)
-    throw ParameterError(
-        mm("corner centre offset e", p.cornerCenterRadial) +
-        " is inconsistent with r and r_tc: e must equal r - r_tc = " + num(impliedE) + " mm");
+    throw ParameterError(mm("corner centre offset e", p.cornerCenterRadial) +
+                         " is inconsistent with r and r_tc: e must equal r - r_tc = " +
+                         formatNumber(impliedE) + " mm");
   if (!(std::abs(p.taperAngleRad) < kPi / 2.0))
     throw ParameterError(deg("taper angle beta", p.taperAngleRad) +
                          " must lie strictly between -90 and 90 deg");
@@ -209,7 +201,7 @@ AptCutter AptCutter::fromApt(const AptParameters& p, int flutes, CutterShape sha
     throw ParameterError(mm("corner centre height h_tc", p.cornerCenterHeight) +
                          " is inconsistent with r_tc, e and delta: a lower line through the tip "
                          "tangent to the corner needs h_tc = " +
-                         num(impliedH) + " mm");
+                         formatNumber(impliedH) + " mm");
   q.cornerCenterHeight = impliedH;
   return AptCutter(q, flutes, shape);
 }
@@ -254,7 +246,7 @@ AptCutter::AptCutter(const AptParameters& p, int flutes, CutterShape shape)
       if (!(top.x() > 0.0)) {
         const double closeZ = p2.y() + p2.x() / -tanB;
         throw ParameterError(deg("taper angle beta", p_.taperAngleRad) +
-                             " closes the side on the axis at z = " + num(closeZ) +
+                             " closes the side on the axis at z = " + formatNumber(closeZ) +
                              " mm, below the " + mm("cutting height h", h));
       }
       addLine(p2, top);

@@ -1,6 +1,7 @@
 #include "cutters/CrossSection.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "cutters/Tolerances.h"
 
 #include <algorithm>
@@ -12,22 +13,15 @@
 namespace engage {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
 void checkPass(const AptCutter& cutter, double s, double d) {
   if (!(std::isfinite(s) && s > 0.0))
-    throw ParameterError("stepover s = " + num(s) + " mm must be positive");
+    throw ParameterError("stepover s = " + formatNumber(s) + " mm must be positive");
   if (!(std::isfinite(d) && d > 0.0))
-    throw ParameterError("depth of cut d = " + num(d) + " mm must be positive");
+    throw ParameterError("depth of cut d = " + formatNumber(d) + " mm must be positive");
   if (d > cutter.height() * (1.0 + tol::kParameterRelative))
-    throw ParameterError("depth of cut d = " + num(d) +
-                         " mm exceeds the cutting height h = " + num(cutter.height()) + " mm");
+    throw ParameterError("depth of cut d = " + formatNumber(d) +
+                         " mm exceeds the cutting height h = " + formatNumber(cutter.height()) +
+                         " mm");
 }
 
 /// Exact integrals of W(z) and z W(z) over [u, v] on one profile piece.
@@ -165,8 +159,9 @@ PaperCrossSection paperCrossSection(const AptCutter& cutter, double s, double d)
                  2.0;
       const double cusp = rt * (1.0 - std::sin(phi));
       if (d < cusp)
-        why.push_back("the depth d is below the cusp height r_tc (1 - sin phi) = " + num(cusp) +
-                      " mm, so Eq 2 subtracts cusp material that is not there");
+        why.push_back(
+            "the depth d is below the cusp height r_tc (1 - sin phi) = " + formatNumber(cusp) +
+            " mm, so Eq 2 subtracts cusp material that is not there");
       if (phi < p.taperAngleRad)
         why.push_back("the stepover meets the taper side, not the corner arc (phi < beta)");
       if (2.0 * cutter.radiusAt(d) < s)

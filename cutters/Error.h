@@ -1,7 +1,9 @@
 #pragma once
 /// \file Error.h
 /// The typed exceptions of engage. Every library throws these; the `engage` application
-/// catches them, prints one line and exits non-zero. No library prints to stderr.
+/// catches them, prints one line and exits non-zero. Libraries report errors only by throwing
+/// these; the run layer (engine/run) alone writes to stderr, for progress, warnings and a
+/// batch's log lines.
 
 #include <stdexcept>
 #include <string>

@@ -2,6 +2,7 @@
 
 #include "cutters/Error.h"
 #include "cutters/Geometry.h"
+#include "cutters/Numbers.h"
 #include "cutters/Tolerances.h"
 
 #include <Eigen/Geometry>
@@ -13,7 +14,6 @@
 namespace engage {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kTwoPi = 2.0 * kPi;
 /// Height change below which a step counts as horizontal, mm.
 constexpr double kFlatZ = 1e-9;
@@ -441,10 +441,6 @@ Eigen::Matrix3d Sweep::alongPathCurvature(const Eigen::Vector3d& foot, double ti
   const Eigen::Vector3d m(tangent.x() * g.x(), tangent.x() * g.y(), tangent.y());
   const Eigen::Vector3d t(-g.y(), g.x(), 0.0);
   return kProfile * m * m.transpose() / m.squaredNorm() + nRho * bend * t * t.transpose();
-}
-
-double Sweep::flatDistance(const Eigen::Vector3d& p) const {
-  return cutter_.profileSignedDistance(flatRho(p, nullptr), p.z() - path_.start.z());
 }
 
 double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3d normals[2],

@@ -117,8 +117,6 @@ class Sweep {
   /// The tip position at parameter u (StepPath::at, with an arc's radius and start angle
   /// computed once).
   Eigen::Vector3d tip(double u) const;
-  /// Closed-form distance of a step that keeps its height.
-  double flatDistance(const Eigen::Vector3d& p) const;
 
   AptCutter cutter_;
   StepPath path_;

@@ -159,9 +159,8 @@ double onePlane(const HalfSpace& p) {
 /// (counter-clockwise seen from outside) clipped by each plane in turn, the cap on the plane
 /// from the new edges, and the volume (and with `moment` its first moment) from the
 /// tetrahedra between the cube's centre and the faces' triangles. The six tetrahedra clipped
-/// plane by plane split into up to three each per plane: with six to eight planes (a flat
-/// end mill's rim on a 3D path, where up to eight corner planes bound the cut) that took 43 %
-/// of the voxel loop of CAMotics' flower_mold.
+/// plane by plane split into up to three each per plane, which is slow with six to eight
+/// planes (a flat end mill's rim on a 3D path, where up to eight corner planes bound the cut).
 class Polyhedron {
  public:
   Polyhedron() {
@@ -285,9 +284,8 @@ double cubeFraction(const HalfSpace* planes, int count, Eigen::Vector3d* centroi
   if (centroid) centroid->setZero();
   if (n == 0) return 1.0;
   if (n == 1 && !centroid) return onePlane(active[0]);
-  // Three planes or more: the cube clipped as a polyhedron (from two, the tetrahedra and the
-  // last plane's closed form are faster: CAMotics' flower_mold's voxel loop 9.16 s against
-  // 9.55 s with the polyhedron from two).
+  // Three planes or more: the cube clipped as a polyhedron (for two, the tetrahedra and the
+  // last plane's closed form are faster).
   if (n >= 3) {
     Polyhedron cut;
     for (int k = 0; k < n; ++k)

@@ -3,18 +3,16 @@
 /// The material, as a sparse grid of volume fractions on OpenVDB (kept out of this header).
 ///
 /// Each voxel (cell-centred, size h) holds the fraction m in [0, 1] of its volume that is
-/// still material, and a partial voxel also the one or two planes that bound that material
-/// (a stock face, a cut). Removing a step's swept solid S replaces S's boundary in each voxel
-/// by the plane of its signed distance and gradient at the centre, moved by the surface's
-/// mean sagitta over the voxel (its curvature), and takes the exact share of the material
-/// inside that plane (polyhedral clipping, stock/CubeClip.h); the voxel keeps
-/// the new plane and the tighter of the earlier ones. This scheme was chosen over a Z-dexel
-/// heightfield and over level-set CSG on measured figures (shared/BUILD-NOTES.md): on a slot
-/// cut at 30 deg to the grid its per-step volume error is well under 0.5 % against 0.13-6 %
-/// for the heightfield, and it costs a few microseconds per changed voxel against 25-57 ms
-/// per step for CSG. The planes matter where two surfaces cross one voxel (a side cut's
-/// front meeting the previous pass's wall, a helix turn meeting the last turn's floor):
-/// there the fraction alone, min(m, 1 - cut), was off by 0.8-2 % per step at D / h = 20.
+/// still material, and a partial voxel also up to three planes that bound that material
+/// (inside two planes, or a corner of floor and wall: inside either of two planes and inside
+/// an outer one, the face the corner was cut into). Removing a step's swept solid S replaces
+/// S's boundary in each voxel by the plane of its signed distance and gradient at the centre,
+/// moved by the surface's mean sagitta over the voxel (its curvature), or on a flat bottom's
+/// rim by the swept solid's supporting planes, and takes the exact share of the material
+/// inside them (polyhedral clipping, stock/CubeClip.h); the voxel keeps the planes that bound
+/// what is left. The planes matter where two surfaces cross one voxel (a side cut's front
+/// meeting the previous pass's wall, a helix turn meeting the last turn's floor), where the
+/// fraction alone, min(m, 1 - cut), cannot tell where the material lies.
 ///
 /// Cost follows what changes: blocks of air are skipped without a look, material tiles are
 /// split into voxels only where the step reaches, voxels already air are not evaluated, and

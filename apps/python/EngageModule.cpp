@@ -10,6 +10,7 @@
 #include "cutters/AptCutter.h"
 #include "cutters/CrossSection.h"
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "engine/gcode/GcodeReader.h"
 #include "engine/model/EngagementModel.h"
 #include "engine/run/Job.h"
@@ -92,15 +93,18 @@ py::dict stepColumns(const RunResult& r) {
   if (r.job.scheduling()) {
     d["feed_scheduled_mm_min"] = column<double>(n, [&](std::size_t i) { return r.plan.feed[i]; });
     d["binding"] = textColumn(n, [&](std::size_t i) { return bindingName(r.plan.binding[i]); });
+    d["mrr_scheduled_mm3_min"] =
+        column<double>(n, [&](std::size_t i) { return s[i].mrr * feedScale(r, i); });
     d["acceleration_mm_s2"] =
         column<double>(n, [&](std::size_t i) { return scheduledAcceleration(r, i); });
   }
   if (!r.sim.loads.empty()) {
-    // Cutting physics (engine/physics): immersion angles in rad as the model uses them
-    // (0 on the side a tooth enters the front half, pi/2 straight ahead), internal units.
+    // Cutting physics (engine/physics), internal units. The entry and exit angles as in
+    // steps.csv: from the feed direction in the direction of rotation (a slot -pi/2 to pi/2).
     const auto& l = r.sim.loads;
-    d["entry_rad"] = column<double>(n, [&](std::size_t i) { return l[i].entry; });
-    d["exit_rad"] = column<double>(n, [&](std::size_t i) { return l[i].exit; });
+    constexpr double kHalfPi = 0.5 * kPi;
+    d["entry_rad"] = column<double>(n, [&](std::size_t i) { return l[i].entry - kHalfPi; });
+    d["exit_rad"] = column<double>(n, [&](std::size_t i) { return l[i].exit - kHalfPi; });
     d["h_max_mm"] = column<double>(n, [&](std::size_t i) { return l[i].hMax; });
     d["h_mean_mm"] = column<double>(n, [&](std::size_t i) { return l[i].hMean; });
     d["fx_N"] = column<double>(n, [&](std::size_t i) { return l[i].force.x(); });
@@ -109,6 +113,13 @@ py::dict stepColumns(const RunResult& r) {
     d["f_peak_N"] = column<double>(n, [&](std::size_t i) { return l[i].peak; });
     d["torque_Nm"] = column<double>(n, [&](std::size_t i) { return l[i].torque; });
     d["power_W"] = column<double>(n, [&](std::size_t i) { return l[i].power; });
+    if (r.job.scheduling()) {
+      auto scaled = [&](std::size_t i) { return scaleLoad(l[i], feedScale(r, i)); };
+      d["h_max_scheduled_mm"] = column<double>(n, [&](std::size_t i) { return scaled(i).hMax; });
+      d["f_peak_scheduled_N"] = column<double>(n, [&](std::size_t i) { return scaled(i).peak; });
+      d["torque_scheduled_Nm"] = column<double>(n, [&](std::size_t i) { return scaled(i).torque; });
+      d["power_scheduled_W"] = column<double>(n, [&](std::size_t i) { return scaled(i).power; });
+    }
   }
   if (r.crossChecked) {
     d[py::str("removed_" + std::string(stockModelName(r.job.otherModel())) + "_mm3")] =
@@ -140,12 +151,18 @@ py::dict moveColumns(const Toolpath& p) {
 }
 
 /// Option values from Python keyword arguments: '_' stands for '-', True/False for flags.
+/// The command line's own options (out, quiet) are refused: a run writes nothing until
+/// Result.write(folder), and shows no progress. (Unknown names are refused by makeJob.)
 OptionValues optionValues(const py::kwargs& kwargs) {
   OptionValues v;
   for (const auto& [key, value] : kwargs) {
     std::string name = py::str(key);
     for (char& c : name)
       if (c == '_') c = '-';
+    if (const OptionInfo* o = findJobOption(name); o && o->commandLineOnly)
+      throw ParameterError(std::string(py::str(key)) +
+                           "= is the command line's: in Python a run writes nothing until "
+                           "result.write(folder), and shows no progress");
     if (py::isinstance<py::bool_>(value))
       v[name] = value.cast<bool>() ? "true" : "false";
     else
@@ -263,6 +280,14 @@ void bindRun(py::module_& m) {
           },
           "summary.json as a dict (report units, see unit_labels)")
       .def_property_readonly("removed_mm3", [](const RunResult& r) { return r.sim.removed; })
+      .def_property_readonly(
+          "warnings",
+          [](const RunResult& r) {
+            WrittenOutputs none;
+            none.steps = false;
+            return runWarnings(r, none);
+          },
+          "the run's warnings, as engage simulate prints them without 'warning: '")
       .def_property_readonly("refed_program", [](const RunResult& r) { return r.refed; })
       .def(
           "steps_csv", [](const RunResult& r) { return stepsTable(r); }, "steps.csv's text")

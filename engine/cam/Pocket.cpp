@@ -1,6 +1,7 @@
 #include "engine/cam/Pocket.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "engine/gcode/GcodeError.h"
 
 #include <polyclipping/clipper.hpp>
@@ -20,7 +21,6 @@ namespace cl = ClipperLib;
 /// Clipper works on integers: 1e4 units per mm (0.1 um), far below any tolerance here and
 /// far inside Clipper's fast 62-bit range for parts up to kilometres.
 constexpr double kScale = 1e4;
-constexpr double kPi = 3.14159265358979323846;
 
 cl::IntPoint toInt(const Eigen::Vector2d& p) {
   return {static_cast<cl::cInt>(std::llround(p.x() * kScale)),
@@ -45,8 +45,7 @@ std::string where(const Toolpath& path, const Move& m) {
 /// is where the raw loops' winding number is positive (Chen & McMains, "Polygon offsetting
 /// by computing winding numbers", 2005). Clipper's own ClipperOffset joins overlapping edges
 /// through the source vertex, a spike `delta` long at every vertex of a finely flattened
-/// curve; their crossings made its cost grow with the square of the vertex count (35 s for
-/// one 2000-gon pocket, 0.1 s this way).
+/// curve; their crossings make its cost grow with the square of the vertex count.
 cl::Path rawOffset(const cl::Path& loop, double delta, double tolerance) {
   const std::size_t n = loop.size();
   std::vector<Eigen::Vector2d> p(n);
@@ -362,16 +361,13 @@ Eigen::Vector2d meet(const Curve& a, const Curve& b, const Eigen::Vector2d& near
   return nearest(mid + perp * std::sqrt(h2), mid - perp * std::sqrt(h2));
 }
 
-/// The ring through points `q` (in cutting order) as the exact offsets of the boundary's
-/// elements: each point is put on the element or corner it is the offset of, runs of
-/// points with one source become one line or arc, and neighbouring runs meet where their
-/// curves cross. Empty when the points do not lie `delta` from the boundary (then the
-/// caller fits arcs to the points instead).
-std::vector<Element> exactElements(const std::vector<Eigen::Vector2d>& q,
-                                   const std::vector<Loop>& boundary, double delta, double tol) {
-  // The source of each polygon edge, from its midpoint (a vertex may sit on a joint).
+/// The source of each edge of the polygon `q` (from its midpoint: a vertex may sit on a
+/// joint): the boundary element or corner it is the offset of. False where an edge does not
+/// lie `delta` from the boundary.
+bool edgeSources(const std::vector<Eigen::Vector2d>& q, const std::vector<Loop>& boundary,
+                 double delta, double tol, std::vector<Source>& src) {
   const std::size_t n = q.size();
-  std::vector<Source> src(n);
+  src.assign(n, Source{});
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector2d mid = 0.5 * (q[i] + q[(i + 1) % n]);
     double best = std::numeric_limits<double>::infinity(), bestScore = best;
@@ -387,8 +383,63 @@ std::vector<Element> exactElements(const std::vector<Eigen::Vector2d>& q,
           src[i] = {static_cast<int>(l), static_cast<int>(end == 1 ? (k + 1) % m : k), end >= 0};
         }
       }
-    if (std::abs(best - delta) > 5.0 * tol) return {};
+    if (std::abs(best - delta) > 5.0 * tol) return false;
   }
+  return true;
+}
+
+/// Appends to `out` the element of curve c from a to b through the points `via` (a line, or
+/// an arc turning the way the points do, split in two where it sweeps more than half a turn);
+/// nothing for a line of no length.
+void appendCurve(std::vector<Element>& out, const Curve& c, const Eigen::Vector2d& a,
+                 const Eigen::Vector2d& b, const std::vector<Eigen::Vector2d>& via) {
+  if ((b - a).norm() < 1e-6 && !(c.circle && via.size() > 2)) return;
+  Element el;
+  el.start = a;
+  el.end = b;
+  if (!c.circle) {
+    out.push_back(el);
+    return;
+  }
+  el.arc = true;
+  el.center = c.p;
+  // The turn direction and sweep from the points the run passes through.
+  double sweep = 0.0;
+  Eigen::Vector2d prev = a;
+  auto step = [&](const Eigen::Vector2d& x) {
+    sweep += std::atan2(cross(prev - c.p, x - c.p), (prev - c.p).dot(x - c.p));
+    prev = x;
+  };
+  for (const Eigen::Vector2d& x : via)
+    step(x);
+  step(b);
+  el.ccw = sweep > 0.0;
+  if (std::abs(sweep) <= kPi + 1e-9) {
+    out.push_back(el);
+    return;
+  }
+  // More than half a turn: two arcs, split halfway.
+  const Eigen::Vector2d u = a - c.p;
+  const double h = 0.5 * sweep;
+  const Eigen::Vector2d mid = c.p + Eigen::Vector2d(u.x() * std::cos(h) - u.y() * std::sin(h),
+                                                    u.x() * std::sin(h) + u.y() * std::cos(h));
+  Element e1 = el, e2 = el;
+  e1.end = mid;
+  e2.start = mid;
+  out.push_back(e1);
+  out.push_back(e2);
+}
+
+/// The ring through points `q` (in cutting order) as the exact offsets of the boundary's
+/// elements: each point is put on the element or corner it is the offset of, runs of
+/// points with one source become one line or arc, and neighbouring runs meet where their
+/// curves cross. Empty when the points do not lie `delta` from the boundary (then the
+/// caller fits arcs to the points instead).
+std::vector<Element> exactElements(const std::vector<Eigen::Vector2d>& q,
+                                   const std::vector<Loop>& boundary, double delta, double tol) {
+  const std::size_t n = q.size();
+  std::vector<Source> src;
+  if (!edgeSources(q, boundary, delta, tol, src)) return {};
   // A lone edge between two of one source is that source.
   for (std::size_t i = 0; i < n; ++i) {
     const Source& before = src[(i + n - 1) % n];
@@ -458,43 +509,7 @@ std::vector<Element> exactElements(const std::vector<Eigen::Vector2d>& q,
   // The joints, then the elements between them.
   std::vector<Element> out;
   auto emit = [&](const Curve& c, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
-                  const std::vector<Eigen::Vector2d>& via) {
-    if ((b - a).norm() < 1e-6 && !(c.circle && via.size() > 2)) return;
-    Element el;
-    el.start = a;
-    el.end = b;
-    if (!c.circle) {
-      out.push_back(el);
-      return;
-    }
-    el.arc = true;
-    el.center = c.p;
-    // The turn direction and sweep from the points the run passes through.
-    double sweep = 0.0;
-    Eigen::Vector2d prev = a;
-    auto step = [&](const Eigen::Vector2d& x) {
-      sweep += std::atan2(cross(prev - c.p, x - c.p), (prev - c.p).dot(x - c.p));
-      prev = x;
-    };
-    for (const Eigen::Vector2d& x : via)
-      step(x);
-    step(b);
-    el.ccw = sweep > 0.0;
-    if (std::abs(sweep) <= kPi + 1e-9) {
-      out.push_back(el);
-      return;
-    }
-    // More than half a turn: two arcs, split halfway.
-    const Eigen::Vector2d u = a - c.p;
-    const double h = 0.5 * sweep;
-    const Eigen::Vector2d mid = c.p + Eigen::Vector2d(u.x() * std::cos(h) - u.y() * std::sin(h),
-                                                      u.x() * std::sin(h) + u.y() * std::cos(h));
-    Element e1 = el, e2 = el;
-    e1.end = mid;
-    e2.start = mid;
-    out.push_back(e1);
-    out.push_back(e2);
-  };
+                  const std::vector<Eigen::Vector2d>& via) { appendCurve(out, c, a, b, via); };
   if (runs.size() == 1) {
     const Curve& c = runs[0].curve;
     const Eigen::Vector2d a =
@@ -655,7 +670,11 @@ std::vector<Loop> boundaryLoops(const Toolpath& boundary) {
   return loops;
 }
 
-std::vector<Ring> pocketRings(const std::vector<Loop>& boundary, const PocketOptions& o) {
+namespace {
+
+/// The pocket options checked: positive sizes, a stepover that leaves no material between
+/// rings, a sane number of levels.
+void checkPocketOptions(const PocketOptions& o) {
   positive(o.toolRadius, "tool radius");
   positive(o.stepover, "stepover");
   positive(o.depth, "depth");
@@ -672,9 +691,11 @@ std::vector<Ring> pocketRings(const std::vector<Loop>& boundary, const PocketOpt
                          " mm makes more than 10000 "
                          "levels of a " +
                          std::to_string(o.depth) + " mm deep pocket");
+}
 
-  // The boundary as one set of oriented polygons: outer loops counter-clockwise, islands
-  // clockwise (even-odd: a loop inside a loop is an island).
+/// The boundary as one set of oriented polygons: outer loops counter-clockwise, islands
+/// clockwise (even-odd: a loop inside a loop is an island).
+cl::Paths boundaryPolygons(const std::vector<Loop>& boundary, const PocketOptions& o) {
   cl::Paths loops;
   for (const Loop& l : boundary) {
     cl::Path p;
@@ -687,10 +708,15 @@ std::vector<Ring> pocketRings(const std::vector<Loop>& boundary, const PocketOpt
   cl::Paths base;
   c.Execute(cl::ctUnion, base, cl::pftEvenOdd, cl::pftEvenOdd);
 
-  // Offsets r, r + s, r + 2s, ... from the boundary, each as regions, every region linked
-  // to the region of the previous offset that holds it.
+  return base;
+}
+
+/// Offsets r, r + s, r + 2s, ... from the boundary, each as regions, every region linked to
+/// the region of the previous offset that holds it (`roots`: those no region holds).
+std::vector<Region> offsetRegions(const cl::Paths& base, const PocketOptions& o,
+                                  std::vector<std::size_t>& roots) {
   std::vector<Region> all;
-  std::vector<std::size_t> roots, previous;
+  std::vector<std::size_t> previous;
   for (int k = 0;; ++k) {
     const double delta = o.toolRadius + k * o.stepover;
     std::vector<Region> regions = regionsAt(base, delta, o.tolerance);
@@ -716,9 +742,14 @@ std::vector<Ring> pocketRings(const std::vector<Loop>& boundary, const PocketOpt
     throw Error("the tool (radius " + std::to_string(o.toolRadius) +
                 " mm) does not fit in the pocket");
 
-  // Where a region has no inner region but material stays farther than r from its ring,
-  // one more ring at the deepest offset that still exists there clears it.
-  const std::size_t uniform = all.size();
+  return all;
+}
+
+/// Where a region (of the first `uniform`) has no inner region but material stays farther
+/// than r from its ring, one more ring at the deepest offset that still exists there clears
+/// it.
+void clearLeftovers(std::vector<Region>& all, std::size_t uniform, const cl::Paths& base,
+                    const PocketOptions& o) {
   for (std::size_t li = 0; li < uniform; ++li) {
     if (!all[li].children.empty()) continue;
     const Region leaf = all[li];
@@ -737,9 +768,12 @@ std::vector<Ring> pocketRings(const std::vector<Loop>& boundary, const PocketOpt
         all.push_back(std::move(r));
       }
   }
+}
 
-  // Cut order: children before their parent (inside out), the nearest child first; within a
-  // region the nearest ring first, each started where it is nearest.
+/// The rings in cut order: children before their parent (inside out), the nearest child
+/// first; within a region the nearest ring first, each started where it is nearest.
+std::vector<Ring> cutOrder(const std::vector<Region>& all, std::vector<std::size_t> roots,
+                           const std::vector<Loop>& boundary, const PocketOptions& o) {
   std::vector<Ring> xy;
   Eigen::Vector2d at(std::numeric_limits<double>::quiet_NaN(), 0.0);
   auto emitRegion = [&](const Region& r) {
@@ -794,8 +828,14 @@ std::vector<Ring> pocketRings(const std::vector<Loop>& boundary, const PocketOpt
     visit(next);
   }
 
-  // Links: a straight feed move when the next ring starts within two stepovers and the
-  // move stays where the tool centre may go (inside the first offset).
+  return xy;
+}
+
+/// Links: a straight feed move to the next ring when it starts within two stepovers and the
+/// move stays where the tool centre may go (inside the first offset of the first `uniform`
+/// regions).
+void linkRings(std::vector<Ring>& xy, const std::vector<Region>& all, std::size_t uniform,
+               const PocketOptions& o) {
   std::vector<Region> wall;
   for (std::size_t i = 0; i < uniform && all[i].offset == o.toolRadius; ++i)
     wall.push_back(all[i]);
@@ -811,6 +851,19 @@ std::vector<Ring> pocketRings(const std::vector<Loop>& boundary, const PocketOpt
       ok = inside(a + (b - a) * (t / 16.0));
     xy[i].linked = ok;
   }
+}
+
+}  // namespace
+
+std::vector<Ring> pocketRings(const std::vector<Loop>& boundary, const PocketOptions& o) {
+  checkPocketOptions(o);
+  const cl::Paths base = boundaryPolygons(boundary, o);
+  std::vector<std::size_t> roots;
+  std::vector<Region> all = offsetRegions(base, o, roots);
+  const std::size_t uniform = all.size();
+  clearLeftovers(all, uniform, base, o);
+  std::vector<Ring> xy = cutOrder(all, roots, boundary, o);
+  linkRings(xy, all, uniform, o);
 
   // Levels: the same rings at each depth, the first ring of a level entered from above.
   const int levels =
@@ -839,7 +892,7 @@ std::string writePocketProgram(const std::vector<Ring>& rings, const PocketOptio
   positive(o.plungeFeed, "plunge feed");
   const double unit = o.inch ? 25.4 : 1.0;
   // Coordinates to 0.01 um in mm and to 0.000001 in in inches, trailing zeros dropped.
-  auto num = [&](double mm) {
+  auto coordinate = [&](double mm) {
     char buf[64];
     std::snprintf(buf, sizeof buf, o.inch ? "%.6f" : "%.5f", mm / unit);
     std::string s(buf);
@@ -862,7 +915,7 @@ std::string writePocketProgram(const std::vector<Ring>& rings, const PocketOptio
     g << "(" << clean << ")\n";
   }
   g << (o.inch ? "G20" : "G21") << " G90 G17 G94 G91.1\n";
-  g << "G0 Z" << num(o.safeZ) << "\n";
+  g << "G0 Z" << coordinate(o.safeZ) << "\n";
   bool retracted = true;
   const double clearance = std::min(o.safeZ - o.top, o.inch ? 0.04 * 25.4 : 1.0);
   double feedNow = -1.0;
@@ -877,12 +930,12 @@ std::string writePocketProgram(const std::vector<Ring>& rings, const PocketOptio
     if (!r.linked) {
       // Retract, go over the start, and enter just above the floor of the level above.
       const double levelTop = r.level == 0 ? o.top : levelZ(o, r.level - 1);
-      if (!retracted) g << "G0 Z" << num(o.safeZ) << "\n";
-      g << "G0 X" << num(s.x()) << " Y" << num(s.y()) << "\n";
-      g << "G0 Z" << num(levelTop + clearance) << "\n";
-      g << "G1 Z" << num(z) << feedWord(o.plungeFeed) << "\n";
+      if (!retracted) g << "G0 Z" << coordinate(o.safeZ) << "\n";
+      g << "G0 X" << coordinate(s.x()) << " Y" << coordinate(s.y()) << "\n";
+      g << "G0 Z" << coordinate(levelTop + clearance) << "\n";
+      g << "G1 Z" << coordinate(z) << feedWord(o.plungeFeed) << "\n";
     } else {
-      g << "G1 X" << num(s.x()) << " Y" << num(s.y()) << feedWord(o.feed) << "\n";
+      g << "G1 X" << coordinate(s.x()) << " Y" << coordinate(s.y()) << feedWord(o.feed) << "\n";
     }
     retracted = false;
     if (ringLines) {
@@ -891,15 +944,16 @@ std::string writePocketProgram(const std::vector<Ring>& rings, const PocketOptio
     }
     for (const Element& e : r.elements) {
       if (e.arc) {
-        g << (e.ccw ? "G3" : "G2") << " X" << num(e.end.x()) << " Y" << num(e.end.y()) << " I"
-          << num(e.center.x() - e.start.x()) << " J" << num(e.center.y() - e.start.y())
-          << feedWord(o.feed) << "\n";
+        g << (e.ccw ? "G3" : "G2") << " X" << coordinate(e.end.x()) << " Y" << coordinate(e.end.y())
+          << " I" << coordinate(e.center.x() - e.start.x()) << " J"
+          << coordinate(e.center.y() - e.start.y()) << feedWord(o.feed) << "\n";
       } else {
-        g << "G1 X" << num(e.end.x()) << " Y" << num(e.end.y()) << feedWord(o.feed) << "\n";
+        g << "G1 X" << coordinate(e.end.x()) << " Y" << coordinate(e.end.y()) << feedWord(o.feed)
+          << "\n";
       }
     }
   }
-  g << "G0 Z" << num(o.safeZ) << "\n";
+  g << "G0 Z" << coordinate(o.safeZ) << "\n";
   g << "M2\n";
   return g.str();
 }

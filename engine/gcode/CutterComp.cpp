@@ -1,11 +1,11 @@
 #include "engine/gcode/CutterComp.h"
+#include "cutters/Numbers.h"
 
 #include <cmath>
 
 namespace engage {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kHalfPi = kPi / 2.0;
 /// Angle below which two directions count as one corner kind or another (LinuxCNC's
 /// TOLERANCE_CONCAVE_CORNER, radians).

@@ -22,8 +22,11 @@
 /// Cutter radius compensation G41, G41.1, G42, G42.1, G40 in G17 and G18, as LinuxCNC 2.9
 /// (CutterComp.h), with radii from the tool table's D column or the D word.
 ///
-/// Not supported, each a GcodeError naming the word: the lathe cycles G70-G72 and G76,
-/// boring cycles G86-G88, canned cycles outside G17, user M codes M100-M199.
+/// Lathe programs: G7/G8 diameter mode and the turning cycles G70-G72 with their .1/.2
+/// variants (LatheCycle.h), in the XZ plane.
+///
+/// Not supported, each a GcodeError naming the word: the threading cycle G76, boring cycles
+/// G86-G88, canned cycles outside G17, user M codes M100-M199.
 
 #include "cutters/Error.h"
 #include "engine/gcode/Toolpath.h"

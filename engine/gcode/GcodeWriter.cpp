@@ -147,16 +147,11 @@ bool sameFeed(double a, double b) {
   return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(b));
 }
 
-}  // namespace
-
-std::string writeProgram(const std::string& source, const Toolpath& path, const FeedPlan& plan) {
-  if (plan.size() != path.moves.size())
-    throw Error("feed plan has " + std::to_string(plan.size()) + " entries for " +
-                std::to_string(path.moves.size()) + " moves");
-
-  // Which moves really change (a single piece at the original feed changes nothing).
+/// Which moves the plan really changes (a single piece at the original feed changes
+/// nothing); the plan checked against the path (pieces in order, positive feeds, no rapids,
+/// no feed of spindle-synchronised or probing motion). Throws Error naming the move.
+std::vector<bool> changedMoves(const Toolpath& path, const FeedPlan& plan) {
   std::vector<bool> changes(path.moves.size(), false);
-  bool anyChange = false;
   for (std::size_t i = 0; i < plan.size(); ++i) {
     const auto& pieces = plan[i];
     if (pieces.empty()) continue;
@@ -183,11 +178,13 @@ std::string writeProgram(const std::string& source, const Toolpath& path, const 
       throw Error(path.files[static_cast<std::size_t>(m.file)] + ":" + std::to_string(m.line) +
                   ": the feed of spindle-synchronised motion (G33, G33.1) or probing (G38.x) "
                   "is not the F word's; engage cannot change it");
-    anyChange = anyChange || changes[i];
   }
-  if (!anyChange) return source;
+  return changes;
+}
 
-  // In-place editing needs execution in line order, once per line, all in the main file.
+/// In-place editing needs execution in line order, once per line, all in the main file:
+/// throws Error naming the line that runs again or the other file.
+void refuseUnorderedLines(const Toolpath& path) {
   int lastLine = 0;
   for (const SourceBlock& b : path.blocks) {
     if (b.file != 0)
@@ -200,15 +197,10 @@ std::string writeProgram(const std::string& source, const Toolpath& path, const 
                   " (a loop or subroutine): engage cannot re-feed such a program in place");
     lastLine = b.line;
   }
-  std::vector<std::vector<std::size_t>> movesOfBlock(path.blocks.size());
-  for (std::size_t i = 0; i < path.moves.size(); ++i)
-    movesOfBlock[static_cast<std::size_t>(path.moves[i].block)].push_back(i);
-  std::map<int, std::size_t> blockOfLine;
-  for (std::size_t b = 0; b < path.blocks.size(); ++b)
-    blockOfLine[path.blocks[b].line] = b;
+}
 
-  // Lines, keeping the file's line ending and its final newline (or lack of one).
-  const std::string eol = source.find("\r\n") != std::string::npos ? "\r\n" : "\n";
+/// The lines of `source` (without their line endings).
+std::vector<std::string> sourceLines(const std::string& source) {
   std::vector<std::string> lines;
   for (std::size_t start = 0; start < source.size();) {
     std::size_t end = source.find('\n', start);
@@ -218,6 +210,31 @@ std::string writeProgram(const std::string& source, const Toolpath& path, const 
     lines.push_back(l);
     start = end + 1;
   }
+  return lines;
+}
+
+}  // namespace
+
+std::string writeProgram(const std::string& source, const Toolpath& path, const FeedPlan& plan) {
+  if (plan.size() != path.moves.size())
+    throw Error("feed plan has " + std::to_string(plan.size()) + " entries for " +
+                std::to_string(path.moves.size()) + " moves");
+
+  const std::vector<bool> changes = changedMoves(path, plan);
+  const bool anyChange = std::find(changes.begin(), changes.end(), true) != changes.end();
+  if (!anyChange) return source;
+
+  refuseUnorderedLines(path);
+  std::vector<std::vector<std::size_t>> movesOfBlock(path.blocks.size());
+  for (std::size_t i = 0; i < path.moves.size(); ++i)
+    movesOfBlock[static_cast<std::size_t>(path.moves[i].block)].push_back(i);
+  std::map<int, std::size_t> blockOfLine;
+  for (std::size_t b = 0; b < path.blocks.size(); ++b)
+    blockOfLine[path.blocks[b].line] = b;
+
+  // Lines, keeping the file's line ending and its final newline (or lack of one).
+  const std::string eol = source.find("\r\n") != std::string::npos ? "\r\n" : "\n";
+  const std::vector<std::string> lines = sourceLines(source);
   const bool finalNewline = !source.empty() && source.back() == '\n';
 
   std::string out;

@@ -1,4 +1,5 @@
 #include "engine/gcode/LineParser.h"
+#include "cutters/Numbers.h"
 
 #include <cctype>
 #include <charconv>
@@ -9,12 +10,19 @@
 namespace engage::gcode {
 namespace {
 
-constexpr double kDegree = 3.14159265358979323846 / 180.0;
+constexpr double kDegree = kPi / 180.0;
 /// LinuxCNC compares EQ/NE with this absolute tolerance.
 constexpr double kEqualTolerance = 0.0001;
 
 std::string shown(char c) {
   if (c == 0) return "the end of the line";
+  const auto byte = static_cast<unsigned char>(c);
+  if (byte < 0x20 || byte >= 0x7f) {
+    // A control or non-ASCII byte prints as nothing on a terminal: name it.
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "0x%02X", byte);
+    return std::string("the byte ") + hex + " (not text: is the file a G-code program?)";
+  }
   return std::string("'") + c + "'";
 }
 

@@ -93,8 +93,17 @@ struct SourceBlock {
 };
 
 /// The whole interpreted program.
+/// A tool change (M6 with the prepared T, or M61 Q) where the program makes it.
+struct ToolLoad {
+  int tool = 0;
+  int file = 0;               ///< index into Toolpath::files
+  int line = 0;               ///< 1-based line of the M6 or M61
+  std::size_t firstMove = 0;  ///< the index of the first move made after it
+};
+
 struct Toolpath {
   std::vector<Move> moves;
+  std::vector<ToolLoad> toolLoads;  ///< the tool changes, in execution order
   std::vector<std::string> files;   ///< source files (main program first, then subroutine files)
   std::vector<SourceBlock> blocks;  ///< executed lines that produced moves, in execution order
   bool inch = false;                ///< the program's units (the last G20/G21 seen)

@@ -1,6 +1,7 @@
 #include "engine/model/EngagementModel.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "engine/units/Quantity.h"
 
 #include <algorithm>
@@ -10,8 +11,6 @@
 
 namespace engage {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 /// Largest W(z) over [0, d]: W is monotone between profile break heights and arc equators.
 double widestWithin(const AptCutter& cutter, double depth) {

@@ -1,4 +1,5 @@
 #include "engine/physics/CuttingForces.h"
+#include "cutters/Numbers.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +9,6 @@
 namespace engage {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kRotationSamples = 90;  ///< per tooth pitch, for the peak
 
 /// Gauss-Legendre nodes and weights on [-1, 1], by Newton's method on P_n.

@@ -1,4 +1,5 @@
 #include "engine/physics/Engagement.h"
+#include "cutters/Numbers.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +8,6 @@
 namespace engage {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kAngleSamples = 90;  ///< intervals over the front half: 2 degrees
 constexpr int kMaxSlices = 64;
 constexpr int kRefinements = 8;  ///< halvings of a 2 degree interval: 0.008 degrees
@@ -18,6 +18,8 @@ constexpr double kReach = 10.0 * kPi / 180.0;  ///< how far the second boundary 
 
 }  // namespace
 
+// One function: it runs for every cutting step with --material, and its slices, angular
+// samples and boundary refinements share one sampling of the stock.
 EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
                                  const Eigen::Vector3d& tip, const Eigen::Vector2d& feedDir,
                                  bool clockwise, double zTop) {

@@ -1,6 +1,7 @@
 #include "engine/physics/Material.h"
 
 #include "cutters/Error.h"
+#include "engine/paths/DataDirectory.h"
 #include "engine/tools/ToolLibrary.h"
 
 #include <nlohmann/json.hpp>
@@ -8,10 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-
-#ifndef ENGAGE_DATA_DIR
-#define ENGAGE_DATA_DIR "data"
-#endif
 
 namespace engage {
 namespace {
@@ -41,7 +38,7 @@ std::string text(const json& o, const char* key) {
 }  // namespace
 
 std::string materialFolder() {
-  return std::string(ENGAGE_DATA_DIR) + "/materials";
+  return dataDirectory() + "/materials";
 }
 
 std::vector<std::string> bundledMaterials() {

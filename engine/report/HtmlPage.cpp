@@ -91,8 +91,8 @@ void writeHtmlPage(std::ostream& os, PageKind kind, const std::string& title,
     for (const char* asset : {"dygraph.min.js", "three.min.js", "OrbitControls.js"})
       writeScript(os, reportAsset(asset), asset);
   }
-  // The data (megabytes for a long run: 3 MB for CAMotics' tiger) straight into the file,
-  // where the whole page had been built as a string first (3.1 MB of tiger's peak).
+  // The data (megabytes for a long run) straight into the file, never the whole page as a
+  // string.
   os << "<script id=\"engage-data\" type=\"application/json\">";
   for (std::string_view piece : dataJson)
     writeScriptSafeJson(os, piece);

@@ -184,7 +184,9 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     const bool cut = !sim.steps.empty() && sim.steps[out.peakStep].mrr > 0.0;
     const double peak = cut ? sim.steps[out.peakStep].mrr : 0.0;
     const int peakLine = cut ? sim.steps[out.peakStep].line : 0;
-    r["status"] = "ok";
+    // "collision": the job ran and wrote its files, but a rapid, a shank or a holder met
+    // material (the status a run alone exits 5 with).
+    r["status"] = sim.collisions.empty() ? "ok" : "collision";
     r["error"] = nullptr;
     r["moves"] = out.job.path.moves.size();
     r["steps"] = sim.steps.size();
@@ -317,6 +319,12 @@ class JobLock {
   std::string owner_, note_;
 };
 
+/// Whether a job's record is of a run that went to its end and wrote its files ("ok", or
+/// "collision": its tool met material), not a failed one.
+bool ranToEnd(const ordered_json& record) {
+  return record["status"] == "ok" || record["status"] == "collision";
+}
+
 /// The record of a finished job, or null when it has not run with these options.
 ordered_json recordOf(const ManifestJob& job, const fs::path& jobs) {
   const fs::path file = jobs / job.name / "job.json";
@@ -349,8 +357,7 @@ std::string awaitStock(const ManifestJob& source, const fs::path& jobs, std::mut
         if (r.is_null()) return why + "has not run with its options (run its shard first)";
       }
     }
-    if (!r.is_null())
-      return r["status"] == "ok" ? "" : why + "failed: " + r["error"].get<std::string>();
+    if (!r.is_null()) return ranToEnd(r) ? "" : why + "failed: " + r["error"].get<std::string>();
     if (stopRequested()) throw Interrupted();
     std::this_thread::sleep_for(std::chrono::seconds(1));  // another process runs it
   }
@@ -460,12 +467,13 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
                     ",peak_mrr_line,cutting_time_s,feed_time_before_s,feed_time_after_s,"
                     "saving_relative,collisions,warnings,error\n";
   ordered_json summary = ordered_json::array();
-  std::size_t ok = 0;
+  std::size_t ok = 0, collided = 0;
   for (const ordered_json& r : records) {
     std::string warnings;
     for (const auto& w : r["warnings"])
       warnings += (warnings.empty() ? "" : "; ") + w.get<std::string>();
     ok += r["status"] == "ok";
+    collided += r["status"] == "collision";
     csv += std::to_string(r["index"].get<std::size_t>() + 1) + "," + quote(r["name"]) + "," +
            r["command"].get<std::string>() + "," + quote(r["program"]) + "," +
            r["status"].get<std::string>() + "," + plain(r["run_time_s"]) + "," + plain(r["moves"]) +
@@ -482,7 +490,8 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
   ordered_json j;
   j["jobs"] = records.size();
   j["ok"] = ok;
-  j["failed"] = records.size() - ok;
+  j["collision"] = collided;
+  j["failed"] = records.size() - ok - collided;
   j["missing"] = missing;
   j["units_of_csv"] = {{"volume", std::string(unitLabel(Dimension::Volume, sys))},
                        {"mrr", std::string(unitLabel(Dimension::VolumeRate, sys))}};
@@ -492,8 +501,9 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
   writeAtomically(out / "report.html", batchReportHtml(records, missing, out, sys));
   char line[256];
   std::snprintf(line, sizeof line,
-                "merged %zu jobs (%zu ok, %zu failed) into %s/batch.csv, batch.json, report.html\n",
-                records.size(), ok, records.size() - ok, out.string().c_str());
+                "merged %zu jobs (%zu ok, %zu with collisions, %zu failed) into %s/batch.csv, "
+                "batch.json, report.html\n",
+                records.size(), ok, collided, records.size() - ok - collided, out.string().c_str());
   std::string text = line;
   if (!missing.empty())
     text += std::to_string(missing.size()) + " of " + std::to_string(all.size()) +
@@ -502,7 +512,7 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
 }
 
 UnitSystem unitsOf(const std::string& u) {
-  if (u == "in") return UnitSystem::Inch;
+  if (u == "in" || u == "inch") return UnitSystem::Inch;
   if (u == "mm") return UnitSystem::Metric;
   throw ParameterError("--units: expected mm or in, found '" + u + "'");
 }
@@ -529,11 +539,34 @@ int usableCpus() {
   return std::max(1, cpus);
 }
 
-BatchReport runBatch(const BatchOptions& o) {
-  const std::vector<ManifestJob> all = readManifest(o.manifest);
-  const Shard shard = parseShard(o.shard);
-  const double memoryLimit = o.memory.empty() ? 0.0 : parseMemory(o.memory);
-  const UnitSystem sys = unitsOf(o.units);
+/// A batch's progress on stderr: on a terminal one line redrawn (line()); otherwise (a
+/// cluster's log) or with --quiet one line per job as it ends (jobEnded()), so that a shard's
+/// log shows its progress before the shard ends.
+struct BatchProgress {
+  bool tty;
+  std::chrono::steady_clock::time_point start;
+  std::size_t jobs;
+  const std::atomic<std::size_t>& finished;
+  const std::atomic<std::size_t>& failed;
+
+  void jobEnded(const ManifestJob& job, const ordered_json& r) const {
+    if (tty) return;
+    std::fprintf(stderr, "batch: [%zu/%zu] %s %s (%.1f s)\n", finished.load(), jobs,
+                 job.name.c_str(), r["status"].get<std::string>().c_str(),
+                 r["run_time_s"].get<double>());
+    std::fflush(stderr);
+  }
+  void line() const {
+    if (!tty) return;
+    const double s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::fprintf(stderr, "\rbatch: %zu / %zu jobs done, %zu failed (%.0f s)   ", finished.load(),
+                 jobs, failed.load(), s);
+  }
+};
+
+/// The batch options that need the manifest checked, before any job runs.
+void checkBatchOptions(const BatchOptions& o, const std::vector<ManifestJob>& all) {
   if (o.workers < 0) throw ParameterError("--workers must not be negative");
   if (!o.job.empty()) {
     if (!o.shard.empty()) throw ParameterError("give either --job or --shard");
@@ -542,22 +575,21 @@ BatchReport runBatch(const BatchOptions& o) {
   }
   if (!o.outputs.empty() && o.outputs != "all" && o.outputs != "tables" && o.outputs != "summary")
     throw ParameterError("--outputs: expected all, tables or summary, found '" + o.outputs + "'");
-  const fs::path out(o.out), jobs = out / "jobs";
-  // Checked before any job runs; kept whatever happens next: a batch resumes from what its
-  // jobs left.
-  OutputDirectory(out).keep();
-  fs::create_directories(jobs);
+}
 
-  // This shard's jobs: every N-th of the manifest, starting at i (a job whose stock is an
-  // earlier job's goes with that job's shard). Those with a record for
-  // the same options are done (failed ones too, unless --retry-failed).
+/// This shard's jobs that are to run, in the order workers take them: every N-th of the
+/// manifest, starting at i (a job whose stock is an earlier job's goes with that job's shard);
+/// those with a record for the same options are done (failed ones too, unless
+/// --retry-failed) and counted in `skipped`; `mine` counts the shard's jobs.
+std::vector<const ManifestJob*> shardJobs(const std::vector<ManifestJob>& all, const Shard& shard,
+                                          const BatchOptions& o, const fs::path& jobs,
+                                          std::size_t& skipped, std::size_t& mine) {
   std::vector<const ManifestJob*> todo;
-  std::size_t skipped = 0, mine = 0;
   for (const ManifestJob& j : all) {
     if (!o.job.empty() ? j.name != o.job : j.group % shard.count != shard.index) continue;
     ++mine;
     const ordered_json r = recordOf(j, jobs);
-    if (!r.is_null() && (r["status"] == "ok" || !o.retryFailed)) {
+    if (!r.is_null() && (ranToEnd(r) || !o.retryFailed)) {
       ++skipped;
       continue;
     }
@@ -578,6 +610,40 @@ BatchReport runBatch(const BatchOptions& o) {
   // a job waits only for one that a worker already holds).
   std::stable_sort(todo.begin(), todo.end(),
                    [](const ManifestJob* a, const ManifestJob* b) { return a->depth < b->depth; });
+  return todo;
+}
+
+/// The shard's failed jobs (this run's or earlier ones: their errors are in their records) and
+/// its jobs whose tool met material, into `result`.
+void shardOutcomes(const std::vector<ManifestJob>& all, const Shard& shard, const fs::path& jobs,
+                   BatchReport& result) {
+  for (const ManifestJob& j : all)
+    if (j.group % shard.count == shard.index) {
+      const ordered_json r = recordOf(j, jobs);
+      if (!r.is_null() && !ranToEnd(r))
+        result.failures.push_back("job " + j.name + " failed: " + r["error"].get<std::string>());
+      else if (!r.is_null() && r.contains("collisions") && r["collisions"].is_number() &&
+               r["collisions"].get<std::size_t>() > 0)
+        result.collisions.push_back("job " + j.name + ": " +
+                                    std::to_string(r["collisions"].get<std::size_t>()) +
+                                    " collision(s), in its summary.json");
+    }
+}
+
+BatchReport runBatch(const BatchOptions& o) {
+  const std::vector<ManifestJob> all = readManifest(o.manifest);
+  const Shard shard = parseShard(o.shard);
+  const double memoryLimit = o.memory.empty() ? 0.0 : parseMemory(o.memory);
+  const UnitSystem sys = unitsOf(o.units);
+  checkBatchOptions(o, all);
+  const fs::path out(o.out), jobs = out / "jobs";
+  // Checked before any job runs; kept whatever happens next: a batch resumes from what its
+  // jobs left.
+  OutputDirectory(out).keep();
+  fs::create_directories(jobs);
+
+  std::size_t skipped = 0, mine = 0;
+  std::vector<const ManifestJob*> todo = shardJobs(all, shard, o, jobs, skipped, mine);
   std::map<std::string, const ManifestJob*> byName;
   for (const ManifestJob& j : all)
     byName[j.name] = &j;
@@ -588,7 +654,7 @@ BatchReport runBatch(const BatchOptions& o) {
 
   // Workers: jobs side by side, each with its share of the threads (results do not depend
   // on the thread count). Measured on 2 cores: 2 jobs side by side beat 1 job on 2 threads
-  // (README, "engage batch"), so the default is one job per usable CPU.
+  // (docs/batches.md), so the default is one job per usable CPU.
   if (o.threads < 0) throw ParameterError("--threads must not be negative");
   const int cores = o.threads > 0 ? o.threads : usableCpus();
   const int workers =
@@ -600,22 +666,9 @@ BatchReport runBatch(const BatchOptions& o) {
   std::size_t elsewhere = 0;  // jobs another process held or finished meanwhile
   const bool tty = isatty(2) && !o.quiet;
   const auto start = std::chrono::steady_clock::now();
-  // On a terminal a progress line; otherwise (a cluster's log) or with --quiet one line per job
-  // as it ends, so that a shard's log shows its progress before the shard ends.
-  auto logJob = [&](const ManifestJob& job, const ordered_json& r) {
-    if (tty) return;
-    std::fprintf(stderr, "batch: [%zu/%zu] %s %s (%.1f s)\n", finished.load(), todo.size(),
-                 job.name.c_str(), r["status"].get<std::string>().c_str(),
-                 r["run_time_s"].get<double>());
-    std::fflush(stderr);
-  };
-  auto report = [&]() {
-    if (!tty) return;
-    const double s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::fprintf(stderr, "\rbatch: %zu / %zu jobs done, %zu failed (%.0f s)   ", finished.load(),
-                 todo.size(), failed.load(), s);
-  };
+  const BatchProgress progress{tty, start, todo.size(), finished, failed};
+  auto logJob = [&](const ManifestJob& job, const ordered_json& r) { progress.jobEnded(job, r); };
+  auto report = [&]() { progress.line(); };
   report();
   // Jobs side by side hold at most --memory, else 80 % of the memory available now.
   MemoryBudget memory(memoryLimit > 0.0 ? memoryLimit : 0.8 * availableMemory());
@@ -635,7 +688,7 @@ BatchReport runBatch(const BatchOptions& o) {
         const bool done = [&] {
           if (!held.acquired()) return true;
           const ordered_json now = recordOf(*todo[k], jobs);
-          return !now.is_null() && (now["status"] == "ok" || !o.retryFailed);
+          return !now.is_null() && (ranToEnd(now) || !o.retryFailed);
         }();
         if (done) {
           std::lock_guard<std::mutex> lock(mutex);
@@ -667,7 +720,7 @@ BatchReport runBatch(const BatchOptions& o) {
         pending.erase(todo[k]->name);
         finishedOne.notify_all();
         ++finished;
-        if (r["status"] != "ok") ++failed;
+        if (!ranToEnd(r)) ++failed;
         logJob(*todo[k], r);
         report();
       }
@@ -699,18 +752,7 @@ BatchReport runBatch(const BatchOptions& o) {
                      " job(s) run in another process on this folder, which merges at its end\n";
     }
   }
-  // Failed jobs, this run's or earlier ones: their errors are in their records.
-  for (const ManifestJob& j : all)
-    if (j.group % shard.count == shard.index) {
-      const ordered_json r = recordOf(j, jobs);
-      if (!r.is_null() && r["status"] != "ok")
-        result.failures.push_back("job " + j.name + " failed: " + r["error"].get<std::string>());
-      else if (!r.is_null() && r.contains("collisions") && r["collisions"].is_number() &&
-               r["collisions"].get<std::size_t>() > 0)
-        result.collisions.push_back("job " + j.name + ": " +
-                                    std::to_string(r["collisions"].get<std::size_t>()) +
-                                    " collision(s), in its summary.json");
-    }
+  shardOutcomes(all, shard, jobs, result);
   return result;
 }
 

@@ -1,6 +1,7 @@
 #include "engine/run/CutterOptions.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 
 #include <algorithm>
 #include <cmath>
@@ -39,8 +40,8 @@ AptCutter buildCutter(const ToolOptions& o, UnitSystem bare) {
 
   // A side flatter than 85 deg to the axis is a face, not a taper: its sweep reaches metres
   // out and the run would take hours (89.9 deg: 10 m wide at a flute length of 18 mm).
-  constexpr double kMaxTaperRad = 85.0 * 3.14159265358979323846 / 180.0;
-  if (taper && std::abs(*taper) > kMaxTaperRad && std::abs(*taper) < 3.14159265358979323846 / 2)
+  constexpr double kMaxTaperRad = 85.0 * kPi / 180.0;
+  if (taper && std::abs(*taper) > kMaxTaperRad && std::abs(*taper) < kPi / 2)
     throw ParameterError(
         "--taper-angle: expected at most 85 deg (a flatter side is a face, not "
         "a taper), found '" +
@@ -91,7 +92,7 @@ std::string describeCutter(const AptCutter& c, UnitSystem sys) {
 UnitSystem chooseUnitSystem(const std::string& unitsOption,
                             const std::vector<std::pair<std::string, Dimension>>& typed) {
   if (unitsOption == "mm") return UnitSystem::Metric;
-  if (unitsOption == "in") return UnitSystem::Inch;
+  if (unitsOption == "in" || unitsOption == "inch") return UnitSystem::Inch;
   if (!unitsOption.empty())
     throw UnitError("--units: expected mm or in, found '" + unitsOption + "'");
   for (const auto& [text, dim] : typed)

@@ -80,9 +80,20 @@ StockSpec parseStock(const std::string& text, UnitSystem sys) {
   if (v.size() != 6)
     throw ParameterError("--stock: expected box:X0,Y0,Z0,X1,Y1,Z1 (six numbers), found " +
                          std::to_string(v.size()) + " in '" + text + "'");
+  // The low corner first: a box typed the other way round is more often a slip (a sign, a
+  // swapped pair) than a choice, so it is refused, not reordered.
+  for (int a = 0; a < 3; ++a)
+    if (!(v[static_cast<std::size_t>(a)] < v[static_cast<std::size_t>(a + 3)])) {
+      const std::string axis(1, static_cast<char>('X' + a));
+      auto f = [&](double x) { return formatQuantity(x, Dimension::Length, sys); };
+      throw ParameterError("--stock box: expected " + axis + "0 below " + axis +
+                           "1 (box:X0,Y0,Z0,X1,Y1,Z1, the low corner first), found " + axis +
+                           "0 = " + f(v[static_cast<std::size_t>(a)]) + " and " + axis +
+                           "1 = " + f(v[static_cast<std::size_t>(a + 3)]) + " in '" + text + "'");
+    }
   Box3 b;
-  b.min = {std::min(v[0], v[3]), std::min(v[1], v[4]), std::min(v[2], v[5])};
-  b.max = {std::max(v[0], v[3]), std::max(v[1], v[4]), std::max(v[2], v[5])};
+  b.min = {v[0], v[1], v[2]};
+  b.max = {v[3], v[4], v[5]};
   s.box = b;
   return s;
 }
@@ -224,20 +235,26 @@ std::vector<HolderSegment> parseHolder(const std::string& text, UnitSystem sys) 
   return out;
 }
 
-/// A tool the program loads, with its first move's file (index into Toolpath::files) and line.
+/// A tool the program loads, with the file (index into Toolpath::files) and line that load it:
+/// its M6 or M61, or where it is not known (a CAMotics project's first tool) its first move.
 struct ToolChange {
   int tool = 0, file = 0, line = 0;
 };
 
-/// The tools a program loads, in order.
+/// The tools a program cuts with, in order of their first moves.
 std::vector<ToolChange> toolChanges(const Toolpath& path) {
   std::vector<ToolChange> changes;
   int current = 0;
-  for (const Move& m : path.moves)
-    if (m.tool != current) {
-      current = m.tool;
-      if (current != 0) changes.push_back({current, m.file, m.line});
-    }
+  for (std::size_t i = 0; i < path.moves.size(); ++i) {
+    const Move& m = path.moves[i];
+    if (m.tool == current) continue;
+    current = m.tool;
+    if (current == 0) continue;
+    ToolChange c{current, m.file, m.line};
+    for (const ToolLoad& l : path.toolLoads)
+      if (l.tool == current && l.firstMove <= i) c = {current, l.file, l.line};
+    changes.push_back(c);
+  }
   return changes;
 }
 
@@ -317,25 +334,38 @@ std::string optionText(const OptionValues& values, const std::string& name) {
 
 namespace {
 
-/// makeJob's work; `speak` gets the report units as soon as they are known.
-Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) {
-  checkNames(command, values);
+/// Several missing options named together (one alone gets its own message where it is read).
+void refuseMissing(JobCommand command, const OptionValues& values, const std::string& program) {
   auto text = [&](const char* name) { return optionText(values, name); };
-  for (const OptionInfo& o : jobOptions())
-    if (o.required && text(o.name.c_str()).empty())
-      throw ParameterError("--" + o.name + " is required");
-  Job job;
-  job.command = command;
-  job.program = text("program");
-  if (job.program.empty()) throw ParameterError("no program given");
-  // Everything that can be checked is checked here, before any work and before any output.
+  if (!isCamoticsProject(program)) {
+    std::vector<std::string> missing;
+    if (text("tool").empty() && text("tools").empty()) missing.push_back("--tool (or --tools)");
+    if (!text("tool").empty() && text("diameter").empty()) missing.push_back("--diameter");
+    if (text("stock").empty() &&
+        !(command == JobCommand::Schedule && text("model") == std::string("analytic")))
+      missing.push_back("--stock");
+    if (missing.size() > 1) {
+      std::string list;
+      for (std::size_t i = 0; i < missing.size(); ++i)
+        list += (i == 0 ? "" : i + 1 == missing.size() ? " and " : ", ") + missing[i];
+      throw ParameterError(list + " are required");
+    }
+  }
+}
+
+/// The job's program read (a CAMotics project's programs one after the other) with the tool
+/// library that gives its tools (--tools, or the project's table); the project, if it is one.
+std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& values,
+                                              std::optional<ToolLibrary>& library) {
+  auto text = [&](const char* name) { return optionText(values, name); };
+  const JobCommand command = job.command;
   ReaderOptions ro;
   ro.toolTable = text("tool-table");
-  ro.toolTableInch = text("tool-table-units") == "in";
+  ro.toolTableInch = text("tool-table-units") != "mm";  // "in" or "inch"
   ro.dialect = dialectOf(text("dialect"));
+  ro.blockDelete = text("block-delete") == "true";
   if (!text("machine").empty()) ro.machine = readMachine(text("machine"));
   job.toolTableInch = ro.toolTableInch;
-  std::optional<ToolLibrary> library;
   job.toolsFile = text("tools");
   // A CAMotics project: its programs, its tool table (unless --tools), its workpiece (unless
   // --stock).
@@ -365,8 +395,9 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   if (maxSteps < 1) throw ParameterError("--max-steps must be positive");
   ro.maxMoves = static_cast<std::size_t>(maxMoves);
   job.path = project ? readPrograms(project->files, ro) : readProgram(job.program, ro);
+  job.simulation.maxSteps = static_cast<std::size_t>(maxSteps);
   // Only a re-fed program is written back, from its words' positions: a run that is not
-  // keeps none (CAMotics' tiger's 67,424 lines: 3.2 MB of the run's peak).
+  // keeps none (megabytes on a long program).
   if (command != JobCommand::Schedule)
     for (SourceBlock& b : job.path.blocks)
       std::vector<WordSpan>().swap(b.words);
@@ -378,29 +409,14 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
     throw ParameterError(job.program + ":" + std::to_string(job.path.latheLine) +
                          ": a lathe program (" + job.path.lathe +
                          "): engage simulates milling; `engage moves` lists its moves");
-  // Bare numbers are in the program's units; --units changes the reports only.
-  const UnitSystem sys = job.path.inch ? UnitSystem::Inch : UnitSystem::Metric;
-  const std::string units = text("units");
-  job.units = units == "in" ? UnitSystem::Inch : units == "mm" ? UnitSystem::Metric : sys;
-  speak = job.units;
-  ToolOptions tool{text("tool"),          text("diameter"),
-                   text("corner-radius"), text("taper-angle"),
-                   text("tip-angle"),     text("bottom-angle"),
-                   text("flute-length"),  wholeNumber(text("flutes"), "--flutes")};
-  job.toolText = tool.tool;
-  std::optional<AptCutter> single;
-  if (!tool.tool.empty()) {
-    if (tool.diameter.empty()) throw ParameterError("--diameter is required with --tool");
-    single = buildCutter(tool, sys);
-  } else {
-    for (const char* name :
-         {"diameter", "corner-radius", "taper-angle", "tip-angle", "bottom-angle", "flute-length"})
-      if (!text(name).empty())
-        throw ParameterError("--" + std::string(name) +
-                             " describes the --tool cutter; give --tool");
-  }
-  chooseCutters(job, library, single, project ? 1 : 0);
-  // --tool's shank and holder, checked for collisions as a library's are.
+  return project;
+}
+
+/// --tool's shank and holder (--stickout, --shank-diameter, --holder), checked for collisions
+/// as a library's are; refused where they describe no --tool.
+void toolPartOptions(Job& job, const OptionValues& values, const std::optional<AptCutter>& single,
+                     UnitSystem sys) {
+  auto text = [&](const char* name) { return optionText(values, name); };
   if (single && !text("stickout").empty()) {
     ToolEntry e;
     e.cutter = *single;
@@ -426,20 +442,12 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   } else if (!single && !text("stickout").empty()) {
     throw ParameterError("--stickout describes --tool; a library's tools carry their own");
   }
-  const std::string voxel = text("voxel");
-  job.voxel = voxel.empty() ? 2.0 * job.cutter.radius() / 20.0
-                            : parseQuantity(voxel, Dimension::Length, sys, "--voxel").value;
-  if (!(job.voxel > 0.0)) throw ParameterError("--voxel must be positive");
-  const std::string step = text("step");
-  SimulationOptions& so = job.simulation;
-  so.maxSteps = static_cast<std::size_t>(maxSteps);
-  so.stepLength = step.empty() ? 0.0 : parseQuantity(step, Dimension::Length, sys, "--step").value;
-  if (!step.empty() && !(so.stepLength > 0.0)) throw ParameterError("--step must be positive");
-  if (!text("stepover").empty())
-    so.stepover = parseQuantity(text("stepover"), Dimension::Length, sys, "--stepover").value;
-  if (!text("depth").empty())
-    so.depth = parseQuantity(text("depth"), Dimension::Length, sys, "--depth").value;
-  if (job.scheduling()) job.schedule = scheduleOptions(values, sys, job);
+}
+
+/// The cutting physics of --material (--force-model, --helix, --spindle), or none; the physics
+/// options without --material refused.
+std::optional<PhysicsOptions> physicsOptions(const OptionValues& values, UnitSystem sys) {
+  auto text = [&](const char* name) { return optionText(values, name); };
   if (!text("material").empty()) {
     PhysicsOptions physics;
     physics.material = readMaterial(text("material"), text("force-model"));
@@ -455,7 +463,7 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
       if (!(physics.spindleRpm > 0.0))
         throw ParameterError("--spindle must be positive, found '" + text("spindle") + "'");
     }
-    so.physics = physics;
+    return physics;
   } else {
     for (const char* name : {"force-model", "helix"})
       if (!text(name).empty())
@@ -463,6 +471,14 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
     if (!text("spindle").empty() && text("force-limit").empty())
       throw ParameterError("--spindle applies with --material or --force-limit");
   }
+  return std::nullopt;
+}
+
+/// The job's stock (a CAMotics project's workpiece unless --stock) and the options that need
+/// one.
+void stockOptions(Job& job, const OptionValues& values,
+                  const std::optional<CamoticsProject>& project, UnitSystem sys) {
+  auto text = [&](const char* name) { return optionText(values, name); };
   const bool analytic = job.scheduling() && text("model") == "analytic";
   job.materialSide = text("material-side");
   job.materialOnRight = job.materialSide != "left";
@@ -490,13 +506,19 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   if (!stock.empty() && !job.materialSide.empty())
     throw ParameterError("--material-side applies without --stock (the stock tells the side)");
   if (job.crossCheck && stock.empty()) throw ParameterError("--cross-check needs a --stock");
-  if (so.physics && stock.empty())
+  if (job.simulation.physics && stock.empty())
     throw ParameterError(
         "--material needs a --stock: the forces come from the measured engagement");
   if (!(job.crossTolerance > 0.0 && job.crossTolerance < 1.0))
     throw ParameterError("--cross-check-tolerance: expected a fraction in (0, 1)");
   job.stockModel = text("stock-model") == "dexel" ? StockModel::Dexel : StockModel::Voxel;
   if (!stock.empty()) job.stock = parseStock(stock, sys);
+}
+
+/// The output folder and what goes into it; a re-fed program that would replace its own
+/// program refused.
+void outputOptions(Job& job, const OptionValues& values) {
+  auto text = [&](const char* name) { return optionText(values, name); };
   job.out = text("out");
   const std::string outputs = text("outputs");
   job.outputs = outputs == "tables"    ? Job::Outputs::Tables
@@ -522,6 +544,64 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
                            std::to_string(triangles));
     job.stlTriangles = static_cast<std::size_t>(triangles);
   }
+}
+
+/// makeJob's work; `speak` gets the report units as soon as they are known. Everything that
+/// can be checked is checked here, before any work and before any output.
+Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) {
+  checkNames(command, values);
+  auto text = [&](const char* name) { return optionText(values, name); };
+  for (const OptionInfo& o : jobOptions())
+    if (o.required && text(o.name.c_str()).empty())
+      throw ParameterError("--" + o.name + " is required");
+  Job job;
+  job.command = command;
+  job.program = text("program");
+  if (job.program.empty()) throw ParameterError("no program given");
+  if (!isCamoticsProject(job.program)) refuseMissing(command, values, job.program);
+  std::optional<ToolLibrary> library;
+  const std::optional<CamoticsProject> project = readJobProgram(job, values, library);
+  // Bare numbers are in the program's units; --units changes the reports only.
+  const UnitSystem sys = job.path.inch ? UnitSystem::Inch : UnitSystem::Metric;
+  const std::string units = text("units");
+  job.units = units == "in" || units == "inch" ? UnitSystem::Inch
+              : units == "mm"                  ? UnitSystem::Metric
+                                               : sys;
+  speak = job.units;
+  ToolOptions tool{text("tool"),          text("diameter"),
+                   text("corner-radius"), text("taper-angle"),
+                   text("tip-angle"),     text("bottom-angle"),
+                   text("flute-length"),  wholeNumber(text("flutes"), "--flutes")};
+  job.toolText = tool.tool;
+  std::optional<AptCutter> single;
+  if (!tool.tool.empty()) {
+    if (tool.diameter.empty()) throw ParameterError("--diameter is required with --tool");
+    single = buildCutter(tool, sys);
+  } else {
+    for (const char* name :
+         {"diameter", "corner-radius", "taper-angle", "tip-angle", "bottom-angle", "flute-length"})
+      if (!text(name).empty())
+        throw ParameterError("--" + std::string(name) +
+                             " describes the --tool cutter; give --tool");
+  }
+  chooseCutters(job, library, single, project ? 1 : 0);
+  toolPartOptions(job, values, single, sys);
+  const std::string voxel = text("voxel");
+  job.voxel = voxel.empty() ? 2.0 * job.cutter.radius() / 20.0
+                            : parseQuantity(voxel, Dimension::Length, sys, "--voxel").value;
+  if (!(job.voxel > 0.0)) throw ParameterError("--voxel must be positive");
+  const std::string step = text("step");
+  SimulationOptions& so = job.simulation;
+  so.stepLength = step.empty() ? 0.0 : parseQuantity(step, Dimension::Length, sys, "--step").value;
+  if (!step.empty() && !(so.stepLength > 0.0)) throw ParameterError("--step must be positive");
+  if (!text("stepover").empty())
+    so.stepover = parseQuantity(text("stepover"), Dimension::Length, sys, "--stepover").value;
+  if (!text("depth").empty())
+    so.depth = parseQuantity(text("depth"), Dimension::Length, sys, "--depth").value;
+  if (job.scheduling()) job.schedule = scheduleOptions(values, sys, job);
+  so.physics = physicsOptions(values, sys);
+  stockOptions(job, values, project, sys);
+  outputOptions(job, values);
   job.progressLabel = commandName(command);
   return job;
 }

@@ -46,21 +46,21 @@ OptionInfo commandLineOnly(OptionInfo o) {
   return o;
 }
 
+/// The table: one entry per option, in help order (one function, as it is one list).
 std::vector<OptionInfo> makeTable() {
   using D = Dimension;
   using G = OptionGroup;
   using K = OptionKind;
   return {
       choice("tool", G::Tool, {"flat", "ball", "bull", "taper", "tapered-ball", "chamfer", "apt"},
-             "",
-             "cutter: flat, ball, bull, taper, tapered-ball, chamfer, apt (with --tools: the "
-             "tool in the spindle before the program's first tool change)"),
+             "", "cutter: flat, ball, bull, taper, tapered-ball, chamfer, apt"),
       quantity("diameter", G::Tool, D::Length,
                "cutter diameter D (tip diameter of a taper, ball diameter of a tapered ball), "
                "e.g. 12mm"),
       plain("tools", K::Text, G::Tool, "",
             "tool library giving each T number its cutter: LinuxCNC table, Fusion 360 JSON, "
-            "FreeCAD .fctl/.fctb, CAMotics project"),
+            "FreeCAD .fctl/.fctb, CAMotics project (--tool then names the tool in the spindle "
+            "before the program's first tool change)"),
       quantity("corner-radius", G::Tool, D::Length, "corner radius r_tc (bull, apt)"),
       quantity("taper-angle", G::Tool, D::Angle,
                "side angle beta to the tool axis (taper, tapered-ball, apt), e.g. 30deg"),
@@ -81,7 +81,7 @@ std::vector<OptionInfo> makeTable() {
             "LOWER-UPPERxHEIGHT, e.g. 22x10,28-40x30 (needs --stickout)"),
       plain("stock", K::Text, G::Stock, "",
             "box:X0,Y0,Z0,X1,Y1,Z1 (program units), a closed STL/OBJ/PLY mesh (mm) or an earlier "
-            "run's stock.vdb; schedule --model analytic runs without one"),
+            "run's stock.vdb; schedule's --model analytic runs without one"),
       choice("stock-model", G::Stock, {"voxel", "dexel"}, "dexel",
              "dexel (vertical rays, the default) or voxel (volume fractions)"),
       quantity("voxel", G::Simulation, D::Length,
@@ -91,10 +91,10 @@ std::vector<OptionInfo> makeTable() {
                "stepover for the analytic model (default: measured width)"),
       quantity("depth", G::Simulation, D::Length,
                "depth of cut for the analytic model (default: measured depth)"),
-      choice("units", G::Output, {"mm", "in"}, "",
+      choice("units", G::Output, {"mm", "in", "inch"}, "",
              "report units: mm or in (default: the program's)"),
       plain("tool-table", K::Text, G::Simulation, "", "LinuxCNC tool table for G43"),
-      choice("tool-table-units", G::Simulation, {"mm", "in"}, "mm",
+      choice("tool-table-units", G::Simulation, {"mm", "in", "inch"}, "mm",
              "units of the tool table's lengths: mm or in"),
       choice("dialect", G::Simulation, {"linuxcnc", "fanuc", "grbl"}, "linuxcnc",
              "the controller the program is for: linuxcnc, fanuc (M98 P with the count in its "
@@ -102,6 +102,8 @@ std::vector<OptionInfo> makeTable() {
       plain("machine", K::Text, G::Simulation, "",
             "machine description (JSON: work offset, G28/G30, start position, travel) so that "
             "G53, G28 and G30 go where the machine puts them"),
+      plain("block-delete", K::Flag, G::Simulation, "",
+            "skip the lines that start with '/' (the controller's block delete switch on)"),
       plain("max-moves", K::Count, G::Simulation, "10000000",
             "most moves a program may make (a loop that never ends is refused at this)"),
       plain("max-steps", K::Count, G::Simulation, "5000000",
@@ -121,8 +123,8 @@ std::vector<OptionInfo> makeTable() {
             "relative per-step difference allowed by --cross-check"),
       commandLineOnly(plain("out", K::Text, G::Output, "out", "output folder")),
       choice("outputs", G::Output, {"all", "tables", "summary"}, "all",
-             "files to write: all; tables (steps.csv, summary.json, the re-fed program, "
-             "report.html without its 3D view); summary (summary.json, the re-fed program)"),
+             "files to write: all; tables (steps.csv, summary.json, report.html without its 3D "
+             "view); summary (summary.json); schedule writes the re-fed program with each"),
       plain("stl-triangles", K::Count, G::Output, "0",
             "stock.stl with at most about this many triangles (voxels averaged in blocks of "
             "2, 4 or 8, nearly flat cells merged), for batches that must fit a quota; 0: the "
@@ -132,7 +134,8 @@ std::vector<OptionInfo> makeTable() {
       commandLineOnly(plain("quiet", K::Flag, G::Output, "", "no progress on the terminal")),
       scheduleOnly(plain("target-mrr", K::Text, G::Schedule, "auto",
                          "target MRR, e.g. 18000mm3/min, or auto")),
-      scheduleOnly(quantity("feed-min", G::Schedule, D::Feed, "lowest feed to command")),
+      scheduleOnly(quantity("feed-min", G::Schedule, D::Feed,
+                            "lowest feed to command (default: 1 mm/min, or --feed-max if lower)")),
       scheduleOnly(quantity("feed-max", G::Schedule, D::Feed,
                             "highest feed to command (default: twice the programmed)")),
       scheduleOnly(quantity("air-feed", G::Schedule, D::Feed,
@@ -155,8 +158,8 @@ std::vector<OptionInfo> makeTable() {
       scheduleOnly(quantity("specific-energy", G::Schedule, D::SpecificEnergy,
                             "specific cutting energy, e.g. 0.7J/mm3")),
       quantity("spindle", G::Schedule, D::SpindleSpeed,
-               "spindle speed, e.g. 12000rpm: for --force-limit, and for --material where the "
-               "program's spindle is stopped or has no S word"),
+               "spindle speed, e.g. 12000rpm, where the program's spindle is stopped or has no S "
+               "word: for --material (and schedule's --force-limit)"),
       scheduleOnly(quantity("max-chip", G::Schedule, D::Length,
                             "largest chip thickness h_max to allow, e.g. 0.05mm (with "
                             "--material; constant chip load: the usual high-speed target)")),

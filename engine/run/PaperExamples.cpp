@@ -1,6 +1,7 @@
 #include "engine/run/PaperExamples.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "engine/model/EngagementModel.h"
 #include "engine/report/HtmlPage.h"
 #include "engine/report/Plots.h"
@@ -60,10 +61,6 @@ struct Progress {
     std::fprintf(stderr, "paper: [%5.1f s] %s\n", s, text.c_str());
   }
 };
-
-std::string num(double v) {
-  return formatNumber(v);
-}
 
 double toIn3PerMin(double mm3PerMin) {
   return toDisplay(mm3PerMin, Dimension::VolumeRate, UnitSystem::Inch);
@@ -137,9 +134,10 @@ ordered_json figure8(const fs::path& dir, const PaperOptions& o, const Progress&
   for (const Point& p : points) {
     const double rel = p.measured / p.exact - 1.0;
     worst = std::max(worst, std::abs(rel));
-    csv += num(p.k) + "," + num(p.q) + "," + (p.side == PathSide::Concave ? "concave" : "convex") +
-           "," + num(toIn3PerMin(p.measured)) + "," + num(toIn3PerMin(p.exact)) + "," +
-           num(toIn3PerMin(p.paper)) + "," + num(rel) + "\n";
+    csv += formatNumber(p.k) + "," + formatNumber(p.q) + "," +
+           (p.side == PathSide::Concave ? "concave" : "convex") + "," +
+           formatNumber(toIn3PerMin(p.measured)) + "," + formatNumber(toIn3PerMin(p.exact)) + "," +
+           formatNumber(toIn3PerMin(p.paper)) + "," + formatNumber(rel) + "\n";
   }
   writeAtomically(dir / "fig8.csv", csv);
   // One CSV per corner radius and side for the plot.
@@ -159,12 +157,13 @@ ordered_json figure8(const fs::path& dir, const PaperOptions& o, const Progress&
       std::string part = "corner_radius_over_D,path_radius_over_D,measured,exact,paper\n";
       for (const Point& p : points)
         if (p.k == k && p.side == side)
-          part += num(p.k) + "," + num(p.q) + "," + num(toIn3PerMin(p.measured)) + "," +
-                  num(toIn3PerMin(p.exact)) + "," + num(toIn3PerMin(p.paper)) + "\n";
-      const std::string file = "fig8_" + sideName + "_rtc" + num(k) + ".csv";
+          part += formatNumber(p.k) + "," + formatNumber(p.q) + "," +
+                  formatNumber(toIn3PerMin(p.measured)) + "," + formatNumber(toIn3PerMin(p.exact)) +
+                  "," + formatNumber(toIn3PerMin(p.paper)) + "\n";
+      const std::string file = "fig8_" + sideName + "_rtc" + formatNumber(k) + ".csv";
       writeAtomically(dir / file, part);
       const std::string lc = " lc " + std::to_string(colour++);
-      c.series.push_back({file, "path_radius_over_D", "measured", "r_{tc}/D = " + num(k),
+      c.series.push_back({file, "path_radius_over_D", "measured", "r_{tc}/D = " + formatNumber(k),
                           "points pt 7 ps 1.2" + lc});
       c.series.push_back({file, "path_radius_over_D", "exact", "", "lines lw 1.5" + lc});
       c.series.push_back({file, "path_radius_over_D", "paper", "", "lines lw 1 dt 2" + lc});
@@ -255,7 +254,7 @@ Run simulatePocket(const Pocket& pocket, const ToolOptions& tool, const std::str
                                {"stock", stock},
                                // The paper's figures compare single steps with the exact
                                // model: voxels hold a side cut's steps within 0.04 %, dexels
-                               // 0.54 % (README, How accurate).
+                               // 0.54 % (docs/accuracy.md).
                                {"stock-model", "voxel"},
                                {"voxel", o.voxel},
                                {"stepover", "0.5in"},
@@ -340,10 +339,12 @@ Ring outerRing(const Run& run, double depth) {
 }
 
 void writeRingCsv(const fs::path& file, const Ring& r) {
-  auto L = [](double v) { return num(toDisplay(v, Dimension::Length, UnitSystem::Inch)); };
-  auto Q = [](double v) { return num(toIn3PerMin(v)); };
-  auto F = [](double v) { return num(toDisplay(v, Dimension::Feed, UnitSystem::Inch)); };
-  auto A = [](double v) { return num(toDisplay(v, Dimension::Acceleration, UnitSystem::Inch)); };
+  auto L = [](double v) { return formatNumber(toDisplay(v, Dimension::Length, UnitSystem::Inch)); };
+  auto Q = [](double v) { return formatNumber(toIn3PerMin(v)); };
+  auto F = [](double v) { return formatNumber(toDisplay(v, Dimension::Feed, UnitSystem::Inch)); };
+  auto A = [](double v) {
+    return formatNumber(toDisplay(v, Dimension::Acceleration, UnitSystem::Inch));
+  };
   std::string csv =
       "arc_length_in,path,mrr_in3_min,mrr_exact_in3_min,mrr_paper_in3_min,feed_adaptive_paper_in_"
       "min,feed_adaptive_measured_in_min,acceleration_paper_in_s2,acceleration_measured_in_s2\n";

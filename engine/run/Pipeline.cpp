@@ -34,6 +34,8 @@ std::unique_ptr<Stock> makeStock(const StockSpec& spec, StockModel model, double
 
 /// Throws when no move of the path comes near the stock: a wrong box or wrong units.
 void checkReach(const Job& job, const Stock& stock) {
+  if (job.path.moves.empty())
+    throw ParameterError(job.program + ": the program makes no moves: nothing to simulate");
   const Box3 sb = stock.bounds();
   for (const Move& m : job.path.moves) {
     const AptCutter& cutter = job.cutters.of(m.tool);
@@ -46,9 +48,11 @@ void checkReach(const Job& job, const Stock& stock) {
   }
   const UnitSystem sys = job.units;
   auto f = [&](double v) { return formatQuantity(v, Dimension::Length, sys); };
-  throw ParameterError("the tool path never reaches the stock (stock from " + f(sb.min.x()) + ", " +
-                       f(sb.min.y()) + ", " + f(sb.min.z()) + " to " + f(sb.max.x()) + ", " +
-                       f(sb.max.y()) + ", " + f(sb.max.z()) + ")");
+  // The stock as given where it is a box (its grid's bounds are rounded out to the cells).
+  const Box3 shown = job.stock.box ? *job.stock.box : sb;
+  throw ParameterError("the tool path never reaches the stock (stock from " + f(shown.min.x()) +
+                       ", " + f(shown.min.y()) + ", " + f(shown.min.z()) + " to " +
+                       f(shown.max.x()) + ", " + f(shown.max.y()) + ", " + f(shown.max.z()) + ")");
 }
 
 CrossCheck crossCheck(const Job& job, const SimulationResult& r, Stock& other) {

@@ -64,8 +64,7 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
   const Job::Outputs which = result.job.outputs;
   const StockView view(result);  // the stock as voxels, for its files and the 3D view
   w.steps = which != Job::Outputs::Summary;
-  // Row by row into the file, never whole in memory (CAMotics' tiger: 13 MB of text; the
-  // run's peak is later, at the report, so it fell by 0.7 MB only).
+  // Row by row into the file, never whole in memory.
   auto writeTable = [&](const std::string& name, const std::vector<std::size_t>* rows) {
     writeFileAtomically((dir / name).string(),
                         [&](std::ostream& os) { writeStepsTable(os, result, rows); });
@@ -88,9 +87,7 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
     PlotSpec ps = plotSpec(result, dir);
     // A long run's plots read fewer steps: the curves along the path the extremes of one
     // bucket per pixel column of the pictures, the top view the steps the report plots (4000
-    // buckets). All of CAMotics' tiger (111,279 steps at 1.03 mm) took gnuplot 4.0 s; the
-    // report's steps for every plot 0.73 s, a third of the dexel run; now 0.45 s (perf's
-    // share of gnuplot in the run, one core: the whole run 2.24 -> 1.96 s, medians of three).
+    // buckets): gnuplot's time follows the points it draws, not the steps of the run.
     if (shown.size() < result.sim.steps.size()) {
       ps.topData = ".plot_steps.csv";
       writeTable(ps.topData, &shown);
@@ -115,8 +112,8 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
     for (const std::string& data : {ps.data, ps.topData})
       if (data != "steps.csv") std::filesystem::remove(dir / data);
     // What the stock files' tasks freed goes back to the system before the report grows the
-    // main thread's heap (it sat in the worker threads' malloc arenas): CAMotics' tiger's peak
-    // on 2 cores 81.7 -> 77.2 MB, on one 75.8 -> 74.8 MB.
+    // main thread's heap (it sits in the worker threads' malloc arenas otherwise, adding to
+    // the run's peak).
     malloc_trim(0);
   } else if (result.job.keepStock) {
     writeStockVdb(view, dir);

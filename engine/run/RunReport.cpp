@@ -49,8 +49,8 @@ json value(double v) {
 }
 
 /// One column of the plots' table: its value at a step of the run, display units. Computed
-/// where read, not held per step (the report's seven to seventeen columns of all of tiger's
-/// 111,279 steps, 6.2 MB, were at the run's peak).
+/// where read, not held per step (seven to seventeen columns of every step of a long run
+/// would be at the run's peak).
 struct Column {
   std::string name;
   std::function<double(std::size_t)> at;
@@ -108,7 +108,7 @@ const Column* find(const std::vector<Column>& c, const std::string& name) {
 
 /// The source lines of the given steps, "file:line" -> text (main program and subroutine files).
 /// Each file is read once, line by line, keeping the lines asked for (a program held whole as
-/// a vector of lines, CAMotics' tiger's 2 MB as 8.8 MB of strings, was at the run's peak).
+/// a vector of lines takes four times its size in strings).
 json sourceLines(const RunResult& result, const std::vector<std::size_t>& steps) {
   const Toolpath& path = result.job.path;
   std::map<int, std::set<int>> wanted;  // file -> its lines
@@ -156,7 +156,8 @@ json surfaceJson(const RunResult& result, const VoxelStock& voxels,
   std::vector<std::int32_t> vertexRow(mesh.points.size());
   for (std::size_t i = 0; i < last.size(); ++i)
     vertexRow[i] = last[i] < 0 ? -1 : index[last[i]];
-  const float f = static_cast<float>(displayFactor(Dimension::Length, result.job.units));
+  // mm to display units (displayFactor is display to internal: 25.4 for inches).
+  const float f = static_cast<float>(1.0 / displayFactor(Dimension::Length, result.job.units));
   std::vector<float> positions;
   positions.reserve(3 * mesh.points.size());
   for (const auto& p : mesh.points)
@@ -186,8 +187,8 @@ ReportSurface reportSurface(const RunResult& result, const VoxelStock& voxels) {
 namespace {
 
 /// Columns of the given steps as JSON text: step, file, line, tool, and every series (numbers
-/// as value() gives them). Written as text, where nlohmann::json's nodes for tiger's 12,400
-/// plotted steps (4.3 MB) had been the report's peak.
+/// as value() gives them). Written as text: nlohmann::json's nodes for every plotted step
+/// would take megabytes.
 std::string table(const RunResult& result, const std::vector<Column>& columns,
                   const std::vector<std::size_t>& which) {
   const Toolpath& path = result.job.path;

@@ -16,8 +16,7 @@ namespace engage {
 
 /// The table's text (header and rows); with `rows`, only those steps (ascending indices).
 std::string stepsTable(const RunResult& result, const std::vector<std::size_t>* rows = nullptr);
-/// The same written to `os` row by row (a long run's table is never whole in memory: CAMotics'
-/// tiger's 111,279 steps are 13 MB of text).
+/// The same written to `os` row by row (a long run's table is never whole in memory).
 void writeStepsTable(std::ostream& os, const RunResult& result,
                      const std::vector<std::size_t>* rows = nullptr);
 

@@ -18,8 +18,7 @@ class VoxelStock;
 
 /// A run's final stock as voxels, for the files and the report's 3D view that show it: the
 /// voxel stock itself, or a dexel stock's rays as voxel fractions, converted on first use and
-/// once (converted for each, the finishing benchmark's dexel run at 0.1 mm spent 1.1 s of its
-/// 12.2 s converting a second time for the report).
+/// once for all the files and the report.
 class StockView {
  public:
   explicit StockView(const RunResult& result);

@@ -240,16 +240,21 @@ double feedTime(const SimulationResult& sim, const std::vector<double>& feed, do
   return t;
 }
 
-Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
-                       const ScheduleOptions& o) {
+namespace {
+
+/// The load a schedule holds per step: the measured MRR, or with --model analytic the exact
+/// model's (0 where it has none).
+double stepLoad(const StepRecord& r, const ScheduleOptions& o) {
+  const double m = o.analytic ? r.mrrExact : r.mrr;
+  return std::isfinite(m) ? m : 0.0;
+}
+
+/// The target MRR per tool (out.targets) and the first of them (out.targetMrr): given, or the
+/// median load of the tool's steady straight steps.
+void chooseTargets(const SimulationResult& sim, const ScheduleOptions& o, Schedule& out) {
   const auto& st = sim.steps;
-  Schedule out;
-  // Target per tool: given, or the median MRR of the tool's steady straight steps.
   out.targetMrr = o.targetMrr;
-  auto load = [&](const StepRecord& r) {
-    const double m = o.analytic ? r.mrrExact : r.mrr;
-    return std::isfinite(m) ? m : 0.0;
-  };
+  auto load = [&](const StepRecord& r) { return stepLoad(r, o); };
   std::map<int, std::vector<double>> steady;
   for (const StepRecord& r : st)
     if (isFeedStep(r)) steady[r.tool];
@@ -258,8 +263,7 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
     if (r.side != PathSide::Straight || !isFeedStep(r) || load(r) <= 0.0 || a.move != r.move ||
         b.move != r.move)
       continue;
-    if (std::abs(load(a) / load(r) - 1.0) < 0.02 && std::abs(load(b) / load(r) - 1.0) < 0.02)
-      steady[r.tool].push_back(load(r));
+    if (steadyBetween(load(a), load(r), load(b))) steady[r.tool].push_back(load(r));
   }
   for (auto& [tool, values] : steady) {
     double& target = out.targets[tool];
@@ -274,30 +278,13 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   }
   for (const auto& [tool, target] : out.targets)
     if (target > 0.0 && !(out.targetMrr > 0.0)) out.targetMrr = target;
-  if (o.physicsLimits() && sim.loads.size() != st.size())
-    throw ParameterError("--max-chip, --max-force, --max-torque and --max-power need --material");
-  if (!o.mrrTarget) {
-    out.targetMrr = 0.0;
-    for (auto& [tool, target] : out.targets)
-      target = 0.0;
-  } else if (!(out.targetMrr > 0.0)) {
-    throw ParameterError(
-        "--target-mrr auto needs steady straight cutting steps; this program has none: give a "
-        "target");
-  }
-  double programmedMax = 0.0;
-  for (const StepRecord& s : st)
-    programmedMax = std::max(programmedMax, s.feed);
-  const double fMax = o.feedMax > 0.0 ? o.feedMax : 2.0 * programmedMax;
-  const double fMin = o.feedMin > 0.0 ? o.feedMin : std::min(1.0, fMax);
-  if (!(fMin <= fMax))
-    throw ParameterError("--feed-min " + formatQuantity(fMin, Dimension::Feed, UnitSystem::Metric) +
-                         " exceeds --feed-max " +
-                         formatQuantity(fMax, Dimension::Feed, UnitSystem::Metric));
-  if (!(o.minChange > 0.0)) throw ParameterError("--min-change must be positive");
-  if (o.jerk < 0.0 || o.acceleration < 0.0)
-    throw ParameterError("--accel and --jerk must not be negative");
+}
 
+/// Per step the feed the targets and limits want (out.wanted) and what bounds it
+/// (out.binding), within [fMin, fMax].
+void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const ScheduleOptions& o,
+                 double fMin, double fMax, Schedule& out) {
+  const auto& st = sim.steps;
   const bool physics = o.physicsLimits();
   out.wanted.assign(st.size(), 0.0);
   out.binding.assign(st.size(), Binding::None);
@@ -316,7 +303,7 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
       out.binding[i] = Binding::NoTarget;
       continue;
     }
-    const double mrr = load(s);
+    const double mrr = stepLoad(s, o);
     const bool air = target > 0.0 ? mrr < kAirShare * target
                                   : !(sim.loads[i].hMax > 0.0) && !std::isnan(sim.loads[i].hMax);
     if (air) {
@@ -363,7 +350,15 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
     if (f < fMin) out.binding[i] = Binding::FeedMin;
     if (f > fMax) out.binding[i] = Binding::FeedMax;
   }
+}
 
+/// The wanted feeds made into feeds the machine can follow and F words a shop wants
+/// (out.feed): acceleration and jerk, F-word levels, short runs merged, one feed for the lines
+/// the writer cannot split; steps held below what they wanted by that marked Acceleration.
+void settleFeeds(const Toolpath& path, const SimulationResult& sim, const ScheduleOptions& o,
+                 double fMin, Schedule& out) {
+  const auto& st = sim.steps;
+  const bool physics = o.physicsLimits();
   // Lines that the writer cannot split (canned cycles: several feed moves on one line;
   // splines) take one feed: the lowest their steps want.
   std::map<int, int> blockFeedMoves;
@@ -407,8 +402,11 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
     if (isFeedStep(st[i]) && (out.binding[i] == Binding::None || physicsBinding(out.binding[i])) &&
         out.feed[i] < out.wanted[i] / (1.0 + o.minChange) - 1e-9)
       out.binding[i] = Binding::Acceleration;
+}
 
-  // The plan: per move, runs of one feed become pieces.
+/// The feed plan the writer follows: per move, its runs of one feed as pieces; the F words.
+void planPieces(const Toolpath& path, const SimulationResult& sim, Schedule& out) {
+  const auto& st = sim.steps;
   out.plan.assign(path.moves.size(), {});
   std::vector<double> moveLength(path.moves.size(), 0.0);
   for (const StepRecord& s : st)
@@ -430,7 +428,42 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
     pieces.back().until = 1.0;
     out.fWords += pieces.size();
   }
+}
 
+}  // namespace
+
+Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
+                       const ScheduleOptions& o) {
+  const auto& st = sim.steps;
+  Schedule out;
+  chooseTargets(sim, o, out);
+  if (o.physicsLimits() && sim.loads.size() != st.size())
+    throw ParameterError("--max-chip, --max-force, --max-torque and --max-power need --material");
+  if (!o.mrrTarget) {
+    out.targetMrr = 0.0;
+    for (auto& [tool, target] : out.targets)
+      target = 0.0;
+  } else if (!(out.targetMrr > 0.0)) {
+    throw ParameterError(
+        "--target-mrr auto needs steady straight cutting steps; this program has none: give a "
+        "target");
+  }
+  double programmedMax = 0.0;
+  for (const StepRecord& s : st)
+    programmedMax = std::max(programmedMax, s.feed);
+  const double fMax = o.feedMax > 0.0 ? o.feedMax : 2.0 * programmedMax;
+  const double fMin = o.feedMin > 0.0 ? o.feedMin : std::min(1.0, fMax);
+  if (!(fMin <= fMax))
+    throw ParameterError("--feed-min " + formatQuantity(fMin, Dimension::Feed, UnitSystem::Metric) +
+                         " exceeds --feed-max " +
+                         formatQuantity(fMax, Dimension::Feed, UnitSystem::Metric));
+  if (!(o.minChange > 0.0)) throw ParameterError("--min-change must be positive");
+  if (o.jerk < 0.0 || o.acceleration < 0.0)
+    throw ParameterError("--accel and --jerk must not be negative");
+
+  wantedFeeds(path, sim, o, fMin, fMax, out);
+  settleFeeds(path, sim, o, fMin, out);
+  planPieces(path, sim, out);
   std::vector<double> programmed(st.size(), 0.0);
   for (std::size_t i = 0; i < st.size(); ++i)
     programmed[i] = st[i].feed;

@@ -1,6 +1,7 @@
 #include "engine/sim/Simulation.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "cutters/Sweep.h"
 
 #include <algorithm>
@@ -16,8 +17,6 @@ namespace engage {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-/// Steps whose MRR differs from both neighbours' by less than this are steady state.
-constexpr double kSteadyChange = 0.02;
 /// Rapids removing less than this many voxels are rounding, not a collision.
 constexpr double kRapidNoiseVoxels = 0.5;
 /// Steps removing less than this fraction of a voxel per step are air cuts.
@@ -126,7 +125,7 @@ void analytic(StepRecord& r, const AptCutter& cutter, const StepPath& sp, double
     // A plunge: the cross-section normal to the motion is the cutter's slice where it
     // enters the material, pi W(depth)^2; the paper has no form for it.
     const double w = cutter.radiusAt(d);
-    r.mrrExact = travel.z() < 0.0 ? 3.14159265358979323846 * w * w * r.feed : kNaN;
+    r.mrrExact = travel.z() < 0.0 ? kPi * w * w * r.feed : kNaN;
     r.mrrPaper = kNaN;
     return;
   }
@@ -264,6 +263,116 @@ StepLoad stepLoad(const PhysicsOptions& o, const Move& m, const StepPath& sp, co
   return cuttingLoad(e, o.material, {flutes, o.helix, cutter.maxRadius()}, fz, rpm);
 }
 
+/// Each tool's non-cutting parts (shank, holder), each with its shape a cell slimmer.
+using SlimParts = std::map<int, std::vector<std::pair<ToolPart, AptCutter>>>;
+
+SlimParts slimPartsOf(const Toolpath& path, const CutterSet& cutters, double h) {
+  SlimParts slimParts;
+  for (const Move& m : path.moves) {
+    if (slimParts.count(m.tool)) continue;
+    auto& list = slimParts[m.tool];
+    for (const ToolPart& part : cutters.partsOf(m.tool)) {
+      AptParameters slim = part.shape.parameters();
+      slim.radius = std::max(0.5 * slim.radius, slim.radius - h);
+      slim.cornerCenterRadial = std::max(0.0, slim.radius - slim.cornerRadius);
+      list.emplace_back(part, AptCutter::fromApt(slim, 2, CutterShape::General));
+    }
+  }
+  return slimParts;
+}
+
+/// The sweeps of tool `tool`'s shank and holder over step `sp` (those below the stock's top),
+/// asked after the step's removal: what they meet is a crash. Whether they meet material is
+/// asked of the part a cell slimmer: a shank as wide as its cutter grazes the wall the cutter
+/// just cut, whose cells hold fractions up to a cell's half diagonal inside the cutter's
+/// radius; how much they meet, of the part itself.
+void addPartSweeps(const SlimParts& slimParts, int tool, const StepPath& sp, double h,
+                   double stockTop, std::deque<Sweep>& sweeps, StepCut& c,
+                   std::vector<const ToolPart*>& asked) {
+  const auto parts = slimParts.find(tool);
+  if (parts == slimParts.end()) return;
+  for (const auto& [part, slim] : parts->second) {
+    if (std::min(sp.start.z(), sp.end.z()) + part.zOffset >= stockTop) continue;
+    StepPath raised = sp;
+    const Eigen::Vector3d up(0.0, 0.0, part.zOffset);
+    raised.start += up;
+    raised.end += up;
+    raised.center += up;
+    for (Eigen::Vector3d& q : raised.points)
+      q += up;
+    const Sweep& slimSweep = sweeps.emplace_back(slim, raised, h);
+    const Sweep& fullSweep = sweeps.emplace_back(part.shape, raised, h);
+    c.parts.push_back({&slimSweep, &fullSweep, stockTop, kRapidNoiseVoxels * h * h * h});
+    asked.push_back(&part);
+  }
+}
+
+/// The collisions of step `si` (of move `move`, which removed `removed`) after its removal
+/// `rem`: a rapid that removes more than half a voxel hits material (a crash on a machine;
+/// below that it is the fraction scheme's rounding along walls it retraces), and the tool's
+/// parts `asked` (in the order of rem.partsMet) that met more.
+void stepCollisions(SimulationResult& out, const Move& m, std::size_t move, std::size_t si,
+                    double removed, const Removal& rem, const std::vector<const ToolPart*>& asked,
+                    double h) {
+  const double noise = kRapidNoiseVoxels * h * h * h;
+  if (m.kind == MoveKind::Rapid && removed > noise) {
+    out.rapidRemoved += removed;
+    addCollision(out.collisions, {move, m.line, m.tool, "rapid", si, si, removed});
+  }
+  for (std::size_t q = 0; q < asked.size(); ++q)
+    if (rem.partsMet.at(q).first > noise)
+      addCollision(out.collisions,
+                   {move, m.line, m.tool, asked[q]->name, si, si, rem.partsMet[q].second});
+}
+
+/// Measured against the analytic model on the steady-state steps (cutting, and within
+/// kSteadyChange of both neighbours on the move), per path class and form.
+void agreeWithModel(SimulationResult& out) {
+  for (std::size_t i = 1; i + 1 < out.steps.size(); ++i) {
+    const StepRecord& a = out.steps[i - 1];
+    const StepRecord& r = out.steps[i];
+    const StepRecord& b = out.steps[i + 1];
+    if (r.kind == MoveKind::Rapid || r.mrr <= 0.0 || a.move != r.move || b.move != r.move) continue;
+    if (!steadyBetween(a.mrr, r.mrr, b.mrr)) continue;
+    Agreement& exact = r.side == PathSide::Concave  ? out.concave
+                       : r.side == PathSide::Convex ? out.convex
+                                                    : out.straight;
+    Agreement& paper = r.side == PathSide::Concave  ? out.concavePaper
+                       : r.side == PathSide::Convex ? out.convexPaper
+                                                    : out.straightPaper;
+    accumulate(exact, r.mrr, r.mrrExact);
+    accumulate(paper, r.mrr, r.mrrPaper);
+  }
+  for (Agreement* a : {&out.straight, &out.concave, &out.convex, &out.straightPaper,
+                       &out.concavePaper, &out.convexPaper})
+    finish(*a);
+}
+
+/// Where measurement and the exact model differ most, over all cutting steps: the ten largest,
+/// kept as they come (never all of them at once).
+void largestDifferences(SimulationResult& out) {
+  auto larger = [](const Difference& x, const Difference& y) {
+    return std::abs(x.relative) != std::abs(y.relative)
+               ? std::abs(x.relative) > std::abs(y.relative)
+               : x.step < y.step;
+  };
+  constexpr std::size_t kLargest = 10;
+  for (std::size_t i = 0; i < out.steps.size(); ++i) {
+    const StepRecord& r = out.steps[i];
+    if (r.kind == MoveKind::Rapid || r.mrr <= 0.0 ||
+        !(std::isfinite(r.mrrExact) && r.mrrExact > 0.0))
+      continue;
+    const Difference d{i, r.line, r.mrr, r.mrrExact, r.mrr / r.mrrExact - 1.0};
+    if (out.largest.size() < kLargest) {
+      out.largest.push_back(d);
+      std::sort(out.largest.begin(), out.largest.end(), larger);
+    } else if (larger(d, out.largest.back())) {
+      out.largest.back() = d;
+      std::sort(out.largest.begin(), out.largest.end(), larger);
+    }
+  }
+}
+
 }  // namespace
 
 SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock& stock,
@@ -276,18 +385,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   SimulationResult out;
   out.volumeBefore = stock.volume();
   const double stockTop = stock.bounds().max.z();
-  // Each tool's non-cutting parts with their shapes a cell slimmer (see below).
-  std::map<int, std::vector<std::pair<ToolPart, AptCutter>>> slimParts;
-  for (const Move& m : path.moves) {
-    if (slimParts.count(m.tool)) continue;
-    auto& list = slimParts[m.tool];
-    for (const ToolPart& part : cutters.partsOf(m.tool)) {
-      AptParameters slim = part.shape.parameters();
-      slim.radius = std::max(0.5 * slim.radius, slim.radius - h);
-      slim.cornerCenterRadial = std::max(0.0, slim.radius - slim.cornerRadius);
-      list.emplace_back(part, AptCutter::fromApt(slim, 2, CutterShape::General));
-    }
-  }
+  const SlimParts slimParts = slimPartsOf(path, cutters, h);
 
   // Plan the steps first (for progress and for the records).
   const std::vector<Planned> plan = planSteps(path, L, options.maxSteps);
@@ -298,10 +396,9 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   // (stock/DexelStock.h), to the same numbers.
   const bool batches = !options.physics && !options.timeSteps;
   // A batch ends at 128 steps or at steps whose boxes hold 8192 columns of the stock's
-  // resolution: small steps (CAMotics' tiger, 22 columns each) need many to give the cores
-  // tiles enough, large ones (bear's ball, about 200) fewer; more held the batch's sweeps and
-  // records in memory for nothing (bear: 64 steps a batch 100 MiB peak, 128 102 MiB, its loop
-  // on 2 cores 1.15 and 1.14 s; tiger's 0.35 and 0.29 s).
+  // resolution: small steps (a few dozen columns each) need many to give the cores tiles
+  // enough, large ones fewer; more would hold the batch's sweeps and records in memory for
+  // nothing.
   constexpr std::size_t kBatchSteps = 128;
   constexpr double kBatchColumns = 8192.0;
 
@@ -339,25 +436,8 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
         columns +=
             ((box.max.x() - box.min.x()) / h + 1.0) * ((box.max.y() - box.min.y()) / h + 1.0);
       }
-      // The shank and the holder, after the cutter took its share: what they meet is a crash.
-      // Whether they meet material is asked of the part a cell slimmer: a shank as wide as its
-      // cutter grazes the wall the cutter just cut, whose cells hold fractions up to a cell's
-      // half diagonal inside the cutter's radius; how much they meet, of the part itself.
-      if (const auto parts = slimParts.find(m.tool); parts != slimParts.end())
-        for (const auto& [part, slim] : parts->second) {
-          if (std::min(b.sp.start.z(), b.sp.end.z()) + part.zOffset >= stockTop) continue;
-          StepPath raised = b.sp;
-          const Eigen::Vector3d up(0.0, 0.0, part.zOffset);
-          raised.start += up;
-          raised.end += up;
-          raised.center += up;
-          for (Eigen::Vector3d& q : raised.points)
-            q += up;
-          const Sweep& slimSweep = sweeps.emplace_back(slim, raised, h);
-          const Sweep& fullSweep = sweeps.emplace_back(part.shape, raised, h);
-          c.parts.push_back({&slimSweep, &fullSweep, stockTop, kRapidNoiseVoxels * h * h * h});
-          b.parts.push_back(&part);
-        }
+      // The shank and the holder, after the cutter took its share.
+      addPartSweeps(slimParts, m.tool, b.sp, h, stockTop, sweeps, c, b.parts);
       if (c.sweep || !c.parts.empty()) {
         b.cut = static_cast<int>(cuts.size());
         cuts.push_back(std::move(c));
@@ -386,16 +466,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       r.curvature = curvatureOf(m);
       out.removed += r.removed;
       out.voxelsChanged += r.voxelsChanged;
-      // A rapid that removes more than half a voxel hits material (a crash on a machine);
-      // below that it is the fraction scheme's rounding along walls it retraces.
-      if (m.kind == MoveKind::Rapid && r.removed > kRapidNoiseVoxels * h * h * h) {
-        out.rapidRemoved += r.removed;
-        addCollision(out.collisions, {p.move, m.line, m.tool, "rapid", si, si, r.removed});
-      }
-      for (std::size_t q = 0; q < batch[k].parts.size(); ++q)
-        if (rem.partsMet.at(q).first > kRapidNoiseVoxels * h * h * h)
-          addCollision(out.collisions, {p.move, m.line, m.tool, batch[k].parts[q]->name, si, si,
-                                        rem.partsMet[q].second});
+      stepCollisions(out, m, p.move, si, r.removed, rem, batch[k].parts, h);
       out.cuttingTime += r.dt;
 
       // Side of the curve the stock is on: concave when it lies on the outer side.
@@ -420,50 +491,8 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   out.volumeAfter = stock.volume();
 
-  // Agreement on steady-state steps: cutting, and within 2 % of both neighbours on the move.
-  for (std::size_t i = 1; i + 1 < out.steps.size(); ++i) {
-    const StepRecord& a = out.steps[i - 1];
-    const StepRecord& r = out.steps[i];
-    const StepRecord& b = out.steps[i + 1];
-    if (r.kind == MoveKind::Rapid || r.mrr <= 0.0 || a.move != r.move || b.move != r.move) continue;
-    if (std::abs(a.mrr / r.mrr - 1.0) > kSteadyChange ||
-        std::abs(b.mrr / r.mrr - 1.0) > kSteadyChange)
-      continue;
-    Agreement& exact = r.side == PathSide::Concave  ? out.concave
-                       : r.side == PathSide::Convex ? out.convex
-                                                    : out.straight;
-    Agreement& paper = r.side == PathSide::Concave  ? out.concavePaper
-                       : r.side == PathSide::Convex ? out.convexPaper
-                                                    : out.straightPaper;
-    accumulate(exact, r.mrr, r.mrrExact);
-    accumulate(paper, r.mrr, r.mrrPaper);
-  }
-  for (Agreement* a : {&out.straight, &out.concave, &out.convex, &out.straightPaper,
-                       &out.concavePaper, &out.convexPaper})
-    finish(*a);
-
-  // Where measurement and the exact model differ most, over all cutting steps: the ten
-  // largest, kept as they come (all of them held at once took 7.8 MB on CAMotics' tiger).
-  auto larger = [](const Difference& x, const Difference& y) {
-    return std::abs(x.relative) != std::abs(y.relative)
-               ? std::abs(x.relative) > std::abs(y.relative)
-               : x.step < y.step;
-  };
-  constexpr std::size_t kLargest = 10;
-  for (std::size_t i = 0; i < out.steps.size(); ++i) {
-    const StepRecord& r = out.steps[i];
-    if (r.kind == MoveKind::Rapid || r.mrr <= 0.0 ||
-        !(std::isfinite(r.mrrExact) && r.mrrExact > 0.0))
-      continue;
-    const Difference d{i, r.line, r.mrr, r.mrrExact, r.mrr / r.mrrExact - 1.0};
-    if (out.largest.size() < kLargest) {
-      out.largest.push_back(d);
-      std::sort(out.largest.begin(), out.largest.end(), larger);
-    } else if (larger(d, out.largest.back())) {
-      out.largest.back() = d;
-      std::sort(out.largest.begin(), out.largest.end(), larger);
-    }
-  }
+  agreeWithModel(out);
+  largestDifferences(out);
   return out;
 }
 

@@ -11,6 +11,7 @@
 #include "engine/physics/Material.h"
 #include "stock/Stock.h"
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -75,8 +76,7 @@ struct CutterSet {
 
 /// One step's record. Lengths mm, feeds mm/min, volumes mm^3, rates mm^3/min, times s.
 /// (The doubles first, the small fields together at the end: no padding between them. One
-/// record per step is held for the whole run, CAMotics' tiger 111,279 of them: 176 -> 160
-/// bytes, 1.8 MB less.)
+/// record per step is held for the whole run.)
 struct StepRecord {
   std::size_t move = 0;       ///< index of the move in the tool path
   double t0 = 0.0, t1 = 1.0;  ///< the step's piece of its move (fractions; stepPath)
@@ -101,6 +101,18 @@ struct StepRecord {
   MoveKind kind = MoveKind::Line;
   PathSide side = PathSide::Straight;
 };
+
+/// A step is in steady state when its rate (MRR, or another load) differs from both its
+/// neighbours' on the same move by at most this share.
+constexpr double kSteadyChange = 0.02;
+
+/// Whether a step of rate `at` (> 0) between neighbours of rates `before` and `after` (on the
+/// same move) is in steady state. The agreement of measured and analytic MRR and the schedule's
+/// automatic target both take their steps by this test.
+inline bool steadyBetween(double before, double at, double after) {
+  return std::abs(before / at - 1.0) <= kSteadyChange &&
+         std::abs(after / at - 1.0) <= kSteadyChange;
+}
 
 /// Measured against analytic on one class of steady-state steps.
 struct Agreement {

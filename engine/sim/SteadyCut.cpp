@@ -1,6 +1,7 @@
 #include "engine/sim/SteadyCut.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "engine/sim/Simulation.h"
 #include "stock/VoxelStock.h"
 
@@ -9,8 +10,6 @@
 
 namespace engage {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 Move rapid(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   Move m;

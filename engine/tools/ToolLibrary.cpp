@@ -1,6 +1,7 @@
 #include "engine/tools/ToolLibrary.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "engine/units/Quantity.h"
 
 #include <nlohmann/json.hpp>
@@ -18,17 +19,10 @@ namespace engage {
 namespace {
 
 using nlohmann::json;
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kInch = 25.4;
 constexpr double kDeg = kPi / 180.0;
 /// A tool library (or project) bigger than this is not one.
 constexpr std::uintmax_t kMaxLibraryBytes = 64u << 20;
-
-std::string num(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
 std::string lower(std::string s) {
   for (char& c : s)
@@ -58,7 +52,7 @@ struct Shape {
 
 AptCutter buildShape(const Shape& s) {
   if (!(std::isfinite(s.diameter) && s.diameter > 0.0))
-    fieldError("diameter", num(s.diameter) + " mm must be positive");
+    fieldError("diameter", formatNumber(s.diameter) + " mm must be positive");
   if (!(s.flutes >= 1 && s.flutes <= 1000))
     fieldError("flutes", std::to_string(s.flutes) + " must be at least 1");
   const double h = s.fluteLength > 0.0 ? s.fluteLength : 3.0 * s.diameter;
@@ -67,8 +61,8 @@ AptCutter buildShape(const Shape& s) {
   if (s.kind == "ball") return AptCutter::ball(s.diameter, h, s.flutes);
   if (s.kind == "bull") {
     if (s.cornerRadius > r + 1e-9)
-      fieldError("corner radius",
-                 num(s.cornerRadius) + " mm is larger than the radius " + num(r) + " mm");
+      fieldError("corner radius", formatNumber(s.cornerRadius) + " mm is larger than the radius " +
+                                      formatNumber(r) + " mm");
     if (s.cornerRadius <= 0.0) return AptCutter::flat(s.diameter, h, s.flutes);
     if (s.cornerRadius >= r - 1e-9) return AptCutter::ball(s.diameter, h, s.flutes);
     return AptCutter::bull(s.diameter, s.cornerRadius, h, s.flutes);
@@ -76,29 +70,33 @@ AptCutter buildShape(const Shape& s) {
   if (s.kind == "chamfer" || s.kind == "drill") {
     // A cone from the tip (or a flat tip) out to the diameter.
     if (s.tipDiameter >= s.diameter)
-      fieldError("tip diameter", num(s.tipDiameter) + " mm is not smaller than the diameter " +
-                                     num(s.diameter) + " mm: the cone does not close");
+      fieldError("tip diameter", formatNumber(s.tipDiameter) +
+                                     " mm is not smaller than the diameter " +
+                                     formatNumber(s.diameter) + " mm: the cone does not close");
     if (s.tipDiameter > 0.0) {
       const double beta = s.taperRad > 0.0 ? s.taperRad : kPi / 2.0 - s.tipAngleRad / 2.0;
       if (!(beta > 0.0 && beta < kPi / 2.0))
-        fieldError("taper angle", num(beta / kDeg) + " deg must lie between 0 and 90 deg");
+        fieldError("taper angle", formatNumber(beta / kDeg) + " deg must lie between 0 and 90 deg");
       const double cone = (s.diameter - s.tipDiameter) / 2.0 / std::tan(beta);
       return AptCutter::taper(s.tipDiameter, beta, cone, s.flutes);
     }
     const double included = s.tipAngleRad > 0.0 ? s.tipAngleRad : 2.0 * s.taperRad;
     if (!(included > 0.0 && included < kPi))
-      fieldError("tip angle", num(included / kDeg) + " deg must lie between 0 and 180 deg");
+      fieldError("tip angle",
+                 formatNumber(included / kDeg) + " deg must lie between 0 and 180 deg");
     const double cone = r / std::tan(included / 2.0);
     return AptCutter::chamfer(s.diameter, included, std::max(h, cone * (1.0 + 1e-12)), s.flutes);
   }
   if (s.kind == "taper" || s.kind == "tapered-ball") {
     if (!(s.taperRad > 0.0 && s.taperRad < 85.0 * kDeg))
-      fieldError("taper angle", num(s.taperRad / kDeg) + " deg must lie between 0 and 85 deg");
+      fieldError("taper angle",
+                 formatNumber(s.taperRad / kDeg) + " deg must lie between 0 and 85 deg");
     if (s.kind == "tapered-ball")
       return AptCutter::taperedBall(s.diameter, s.taperRad, h, s.flutes);
     if (s.cornerRadius > r + 1e-9)
-      fieldError("corner radius",
-                 num(s.cornerRadius) + " mm is larger than the tip radius " + num(r) + " mm");
+      fieldError("corner radius", formatNumber(s.cornerRadius) +
+                                      " mm is larger than the tip radius " + formatNumber(r) +
+                                      " mm");
     if (s.cornerRadius <= 0.0) return AptCutter::taper(s.diameter, s.taperRad, h, s.flutes);
     AptParameters p;
     p.radius = r;

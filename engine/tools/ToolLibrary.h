@@ -4,7 +4,8 @@
 /// cutter (the part that cuts) and the non-cutting parts above it (shank, holder). Formats:
 ///
 /// - LinuxCNC tool table (`T1 P1 D6 Z35 ;6mm flat 3 flutes`): D and the length; the shape and
-///   the rest from the comment's words (see readLinuxcncTable in ToolLibrary.cpp and README).
+///   the rest from the comment's words (see readLinuxcncTable in ToolLibrary.cpp and
+///   docs/inputs.md).
 /// - Fusion 360 tool library JSON (`{"data": [...]}`, as Fusion exports it): type, unit and the
 ///   geometry fields DC, RE, TA, SIG, tip-diameter, LCF, LB, OAL, SFDM, NOF; the holder's
 ///   segments; the number from post-process.number.

@@ -1,4 +1,5 @@
 #include "engine/units/Quantity.h"
+#include "cutters/Numbers.h"
 
 #include <algorithm>
 #include <cctype>
@@ -11,7 +12,6 @@
 namespace engage {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kInch = 25.4;                        // mm
 constexpr double kCubicInch = kInch * kInch * kInch;  // mm^3
 constexpr double kStandardGravity = 9806.65;          // mm/s^2
@@ -317,17 +317,6 @@ std::string_view unitLabel(Dimension dim, UnitSystem sys) {
 std::string_view unitTag(Dimension dim, UnitSystem sys) {
   const Display& d = displayOf(dim);
   return sys == UnitSystem::Inch ? d.inchTag : d.metricTag;
-}
-
-std::string formatNumber(double value) {
-  if (std::isnan(value)) return "nan";
-  if (value == 0.0) return "0";  // and not "-0"
-  // As printf's %.6g (the standard defines to_chars' general format with a precision so),
-  // without the locale and the format string: steps.csv of CAMotics' tiger (111,279 steps,
-  // 2.4 million numbers) spent 0.16 s of a 1.9 s run in printf.
-  char buf[32];
-  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, 6);
-  return ec == std::errc() ? std::string(buf, end) : std::string("nan");
 }
 
 std::string formatQuantity(double internal, Dimension dim, UnitSystem sys) {

@@ -7,6 +7,7 @@
 /// caller's default system (mm or inch based, degrees for angles, rpm for spindle speed).
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 
 #include <optional>
 #include <string>
@@ -73,9 +74,6 @@ std::string_view unitTag(Dimension dim, UnitSystem sys);
 
 /// "<value> <label>" with six significant digits, e.g. "13.9153 in^3/min".
 std::string formatQuantity(double internal, Dimension dim, UnitSystem sys);
-
-/// A number with six significant digits ("nan" for NaN).
-std::string formatNumber(double value);
 
 /// "mm" or "in".
 std::string_view systemName(UnitSystem sys);

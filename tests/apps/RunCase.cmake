@@ -71,3 +71,11 @@ if(EXISTS ${CASE}/same_as)
     endif()
   endforeach()
 endif()
+# check.py: the written numbers against independent values computed there.
+if(EXISTS ${CASE}/check.py)
+  execute_process(COMMAND ${PYTHON} ${CASE}/check.py ${OUT} ${DATA} ${ENGAGE}
+                  RESULT_VARIABLE failed OUTPUT_VARIABLE checked ERROR_VARIABLE why)
+  if(failed)
+    message(FATAL_ERROR "${CASE}/check.py failed:\n${checked}${why}")
+  endif()
+endif()

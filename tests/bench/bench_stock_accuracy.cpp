@@ -10,6 +10,7 @@
 // its axis to the grid: the worst step and the worst total over the configurations.
 
 #include "cutters/CrossSection.h"
+#include "cutters/Numbers.h"
 #include "stock/DexelStock.h"
 #include "stock/VoxelStock.h"
 #include "tests/stock/StockTestSupport.h"
@@ -25,7 +26,6 @@ using namespace engage;
 using test::line;
 
 int main() {
-  constexpr double kPi = 3.14159265358979323846;
   const Eigen::Vector3d dir(std::cos(kPi / 6), std::sin(kPi / 6), 0.0);
   const Eigen::Vector3d side(-std::sin(kPi / 6), std::cos(kPi / 6), 0.0);
   const AptCutter c = AptCutter::flat(6.0, 18.0);

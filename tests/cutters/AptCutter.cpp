@@ -3,6 +3,7 @@
 
 #include "cutters/AptCutter.h"
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 
 #include <catch2/catch.hpp>
 
@@ -13,10 +14,10 @@
 using Catch::Matchers::Contains;
 using engage::AptCutter;
 using engage::AptParameters;
+using engage::kPi;
 using engage::ParameterError;
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 double deg(double d) {
   return d * kPi / 180.0;
 }

@@ -5,6 +5,7 @@
 
 #include "cutters/CrossSection.h"
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 
 #include <catch2/catch.hpp>
 
@@ -13,10 +14,10 @@
 using Catch::Matchers::Contains;
 using engage::AptCutter;
 using engage::exactCrossSection;
+using engage::kPi;
 using engage::paperCrossSection;
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kRel = 1e-10;
 double deg(double d) {
   return d * kPi / 180.0;

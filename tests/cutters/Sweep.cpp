@@ -1,6 +1,7 @@
 // Tests of cutters/Sweep.h: distances to swept solids against hand values.
 
 #include "cutters/Sweep.h"
+#include "cutters/Numbers.h"
 
 #include <catch2/catch.hpp>
 
@@ -9,7 +10,6 @@
 using namespace engage;
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 /// The XY arc of radius 10 about the origin from (10, 0) to (0, 10), counter-clockwise.
 StepPath quarterArc() {

@@ -109,6 +109,40 @@ def test_cutting_physics_of_a_slot(slot):
     assert np.allclose(steps["power_W"][mid], torque * 2 * math.pi * 10000 / 60, rtol=0.03)
     assert np.allclose(steps["h_max_mm"][mid], c, rtol=1e-6)
     assert r.summary["physics"]["material"] == "Aluminium 7075-T6"
+    # The entry and exit angles as steps.csv has them, from the feed direction in the
+    # direction of rotation: a slot engages -90 to 90 deg (to 2.5 deg at the default rays).
+    assert np.allclose(steps["entry_rad"][mid], -math.pi / 2, atol=math.radians(2.5))
+    assert np.allclose(steps["exit_rad"][mid], math.pi / 2, atol=math.radians(2.5))
+    csv = r.steps_csv().splitlines()
+    header = csv[0].split(",")
+    row = csv[1 + int(np.flatnonzero(mid)[0])].split(",")
+    i = int(np.flatnonzero(mid)[0])
+    assert float(row[header.index("entry_deg")]) == pytest.approx(
+        math.degrees(steps["entry_rad"][i]), abs=1e-4)
+
+
+def test_warnings_and_the_scheduled_loads(slot):
+    # A 6 mm tool in 2 mm cells: 3 across, coarser than D/5; the command line warns so too.
+    r = engage.run("schedule", program=slot, tool="flat", diameter=6, flutes=3, stock=BOX,
+                   voxel="2mm", material="aluminium-7075-t6", spindle="10000rpm",
+                   max_chip="0.01mm")
+    assert any("coarse" in w for w in r.warnings)
+    steps = r.steps
+    mid = (steps["x_mm"] > 10) & (steps["x_mm"] < 20) & (steps["kind"] == "line")
+    # Held to h_max 0.01 mm, half the programmed f_z = 0.02 mm: the scheduled chip is at most
+    # the limit (1e-6: rounding) and the feed no higher than half the programmed one.
+    assert np.all(steps["h_max_scheduled_mm"][mid] <= 0.01 * (1 + 1e-6))
+    assert np.all(steps["feed_scheduled_mm_min"][mid] <= 300.0 * (1 + 1e-6))
+    # The MRR at the scheduled feed scales with the feed (the removal per length is the same).
+    assert np.allclose(steps["mrr_scheduled_mm3_min"][mid],
+                       steps["mrr_mm3_min"][mid] * steps["feed_scheduled_mm_min"][mid] /
+                       steps["feed_mm_min"][mid], rtol=1e-9)
+
+
+@pytest.mark.parametrize("option", ["out", "quiet"])
+def test_the_command_lines_own_options_are_refused(slot, option):
+    with pytest.raises(engage.Error, match=option + "= is the command line's"):
+        engage.run(program=slot, tool="flat", diameter=6, stock=BOX, **{option: "x"})
 
 
 def test_schedule_and_cross_check(slot):

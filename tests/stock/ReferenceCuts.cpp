@@ -10,6 +10,7 @@
 // default faceting (the error falls as the square of the facet) about a quarter of that.
 
 #include "tests/support/ReferenceCuts.h"
+#include "cutters/Numbers.h"
 #include "tests/stock/StockTestSupport.h"
 #include "tests/support/ExactSweep.h"
 
@@ -90,7 +91,7 @@ TEST_CASE("the exact reference: a slot's volume in closed form", "[reference]") 
   const std::vector<double> v = test::exactRemovals(path, {flat, flat}, box);
   CHECK(v[0] == Approx(480.0).epsilon(1e-12));
   CHECK(v[1] == Approx(40.0).epsilon(1e-12));
-  CHECK(test::facetDeviation(flat) == Approx(3.0 * (1.0 - std::cos(3.14159265358979 / 256))));
+  CHECK(test::facetDeviation(flat) == Approx(3.0 * (1.0 - std::cos(kPi / 256))));
 }
 
 TEST_CASE("both stock models against the exact reference: floor_recut flat", "[reference]") {

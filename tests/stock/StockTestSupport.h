@@ -3,6 +3,7 @@
 // the thin-cut reference) and the stock benchmarks: a box of either model, straight passes cut
 // at 30 degrees to the grid, and the per-step errors against a closed form.
 
+#include "cutters/Numbers.h"
 #include "cutters/Sweep.h"
 #include "stock/DexelStock.h"
 #include "stock/Stock.h"
@@ -22,7 +23,6 @@ inline std::unique_ptr<Stock> boxStock(const std::string& model, const Box3& box
   return std::make_unique<DexelStock>(DexelStock::box(box, h));
 }
 
-constexpr double kPi = 3.14159265358979323846;
 const Eigen::Vector3d kDir(std::cos(kPi / 6), std::sin(kPi / 6), 0.0);  // 30 deg to the grid
 const Eigen::Vector3d kSide(-std::sin(kPi / 6), std::cos(kPi / 6), 0.0);
 

@@ -8,6 +8,7 @@
 // converted to double once per move (rounding ~1e-11 mm^3 of a 1e5 mm^3 total).
 
 #include "tests/support/ExactSweep.h"
+#include "cutters/Numbers.h"
 
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Nef_polyhedron_3.h>
@@ -34,8 +35,6 @@ using Point = Kernel::Point_3;
 using Mesh = CGAL::Surface_mesh<Point>;
 using Nef = CGAL::Nef_polyhedron_3<Kernel>;
 namespace PMP = CGAL::Polygon_mesh_processing;
-
-constexpr double kPi = 3.14159265358979323846;
 
 /// The profile's vertices in (rho, z): segment ends, and arcs cut into equal chords of at most
 /// `arcDegrees`.

@@ -1,5 +1,6 @@
 #include "tests/support/ReferenceCuts.h"
 
+#include "cutters/Numbers.h"
 #include "engine/gcode/GcodeReader.h"
 #include "engine/sim/Simulation.h"
 #include "tests/support/ExactSweep.h"
@@ -10,7 +11,7 @@
 namespace engage::test {
 
 std::vector<ReferenceCase> referenceCases(const std::string& sourceDir) {
-  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  constexpr double kDeg = kPi / 180.0;
   const std::string dir = sourceDir + "/data/gcode/thin/";
   Box3 box;
   box.min = {0.0, 0.0, 0.0};

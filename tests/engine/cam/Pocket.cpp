@@ -4,6 +4,7 @@
 #include "engine/cam/Pocket.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "engine/gcode/GcodeReader.h"
 
 #include <catch2/catch.hpp>
@@ -13,7 +14,6 @@
 using namespace engage;
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 Loop rectangle(double x0, double y0, double x1, double y1) {
   return polygonLoop({{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}});

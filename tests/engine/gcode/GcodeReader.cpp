@@ -2,6 +2,7 @@
 // LinuxCNC's rs274 by scripts/compare_linuxcnc.py), semantics checked by hand, and errors.
 
 #include "engine/gcode/GcodeReader.h"
+#include "cutters/Numbers.h"
 #include "engine/gcode/GcodeError.h"
 
 #include <catch2/catch.hpp>
@@ -18,7 +19,6 @@ using Catch::Matchers::Contains;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Hand-computed positions are exact decimal numbers; 1e-9 mm is round-off.
 constexpr double kExact = 1e-9;
 

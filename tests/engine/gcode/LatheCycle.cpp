@@ -109,7 +109,7 @@ TEST_CASE("G70 finishes in P passes from D to E away from the profile", "[gcode]
   checkMove(m[6], LatheMoveKind::Line, -10, 10);
 }
 
-TEST_CASE("G71 cuts a pocket after the main passes; G71.1 leaves it", "[gcode][lathe]") {
+TEST_CASE("G71 cuts a pocket after the main passes, G71.1 leaves it", "[gcode][lathe]") {
   // A groove between Z-4 and Z-10 down to X3, walls sloping 3 in X over 2 in Z.
   const auto profile = polyline(
       {kStart, zx(0, 6), zx(-4, 6), zx(-6, 3), zx(-8, 3), zx(-10, 6), zx(-14, 6), zx(-14, 10)});

@@ -46,7 +46,7 @@ TEST_CASE("quadratic Bezier within tolerance", "[gcode]") {
         }) <= 0.001 + 1e-12);
 }
 
-TEST_CASE("NURBS: degree 1 is the control polygon; one quadratic span is a Bezier", "[gcode]") {
+TEST_CASE("NURBS: degree 1 is the control polygon, one quadratic span is a Bezier", "[gcode]") {
   const std::vector<Vector2d> cp{{0, 0}, {10, 0}, {10, 10}, {0, 10}};
   const auto poly = flattenNurbs(cp, {1, 1, 1, 1}, 2, 0.001);
   // Every control point is on the result and nothing strays from the polygon.

@@ -1,6 +1,7 @@
 // Tests of engine/gcode/Toolpath.h helpers against hand values.
 
 #include "engine/gcode/Toolpath.h"
+#include "cutters/Numbers.h"
 
 #include <catch2/catch.hpp>
 
@@ -9,7 +10,6 @@
 using namespace engage;
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 Move arc(Eigen::Vector3d s, Eigen::Vector3d e, Eigen::Vector3d c, int turns,
          Plane plane = Plane::XY) {
   Move m;

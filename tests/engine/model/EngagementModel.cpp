@@ -4,6 +4,7 @@
 
 #include "engine/model/EngagementModel.h"
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 
 #include <catch2/catch.hpp>
 
@@ -14,7 +15,6 @@ using Catch::Matchers::Contains;
 
 namespace {
 constexpr double kRel = 1e-12;  // closed forms on both sides: only round-off differs
-constexpr double kPi = 3.14159265358979323846;
 }  // namespace
 
 TEST_CASE("linear MRR is area times feed (Eq 6)", "[model]") {
@@ -36,6 +36,31 @@ TEST_CASE("flat D 1 on a circle of tool-centre radius 1: exact and paper forms",
   CHECK(m.paperCentroidDistance() == Approx(mm).epsilon(kRel));
   CHECK(m.mrrPaper(100.0, concave) == Approx(15.0 * (1.5 - mm) / (1.5 - 0.5)).epsilon(kRel));
   CHECK(m.mrrPaper(100.0, convex) == Approx(15.0 * (0.5 + mm) / (0.5 + 0.5)).epsilon(kRel));
+}
+
+TEST_CASE("Eq 6 with a cutter whose exact and paper areas differ: a 90 deg V-bit", "[model]") {
+  // D 10, s 4, d 3: the cone's half width at height z is z (45 deg), the removed width
+  // min(2z, s): area = int_0^2 2z dz + int_2^3 4 dz = 4 + 4 = 8 mm^2 (exact); Eq 3 says
+  // s d = 12 mm^2. At 100 mm/min: 800 and 1200 mm^3/min.
+  const EngagementModel m(AptCutter::chamfer(10.0, kPi / 2, 5.0), 4.0, 3.0);
+  CHECK(m.mrr(100.0, {}) == Approx(800.0).epsilon(1e-9));
+  CHECK(m.mrrPaper(100.0, {}) == Approx(1200.0).epsilon(kRel));
+}
+
+TEST_CASE("the paper's Eq 12/13 ratios by hand, and where they differ from the exact", "[model]") {
+  // Flat D 1, s 0.5, d 0.3: centroid x = r - s/2 = 0.25 from the axis, 0.15 up; the paper's
+  // m from the contact point (r, 0): sqrt(0.25^2 + 0.15^2) = 0.2915476.
+  const EngagementModel m(AptCutter::flat(1.0, 3.0), 0.5, 0.3);
+  const double mm = std::sqrt(0.25 * 0.25 + 0.15 * 0.15);
+  // Concave, tool-centre radius 1: R = 1.5, Eq 12: (R - m) / (R - r) = 1.2084524.
+  CHECK(m.centroidSpeedRatioPaper({PathSide::Concave, 1.0}) ==
+        Approx((1.5 - mm) / (1.5 - 0.5)).epsilon(kRel));
+  // Convex: R = 0.5, Eq 13: (R + m) / (R + r) = 0.7915476.
+  CHECK(m.centroidSpeedRatioPaper({PathSide::Convex, 1.0}) ==
+        Approx((0.5 + mm) / (0.5 + 0.5)).epsilon(kRel));
+  // The exact (Pappus) ratios (rho +- x) / rho: 1.25 and 0.75, not the paper's.
+  CHECK(m.centroidSpeedRatio({PathSide::Concave, 1.0}) == Approx(1.25).epsilon(kRel));
+  CHECK(m.centroidSpeedRatio({PathSide::Convex, 1.0}) == Approx(0.75).epsilon(kRel));
 }
 
 TEST_CASE("with a horizontal m the paper's Eq 12/13 equal the exact ratio", "[model]") {

@@ -10,6 +10,7 @@
 
 #include "engine/physics/CuttingForces.h"
 
+#include "cutters/Numbers.h"
 #include "cutters/Sweep.h"
 #include "stock/DexelStock.h"
 
@@ -20,7 +21,6 @@
 using namespace engage;
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 constexpr double a = 3.0, c = 0.1, R = 5.0;
 constexpr int N = 3;
 

@@ -5,6 +5,7 @@
 
 #include "engine/physics/Engagement.h"
 
+#include "cutters/Numbers.h"
 #include "cutters/Sweep.h"
 #include "stock/DexelStock.h"
 #include "tests/stock/StockTestSupport.h"
@@ -17,7 +18,6 @@
 using namespace engage;
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 constexpr double D = 10.0, R = 5.0, ap = 3.0, h = 0.2;
 
 /// A 60 x 40 x 20 mm block (top at z = 0), cut by one pass along +X from outside it to x = 0

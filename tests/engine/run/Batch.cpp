@@ -3,6 +3,7 @@
 #include "engine/run/Batch.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "tests/engine/run/RunTestSupport.h"
 
 #include <fcntl.h>
@@ -43,8 +44,7 @@ TEST_CASE("a batch runs its jobs and records a failure without stopping", "[run]
   const auto record = nlohmann::json::parse(in);
   CHECK(record["status"] == "ok");
   // The slot: (30 x 6 + pi 3^2) x 2 mm^3 within the voxels' 0.2 % on a flat slot.
-  CHECK(record["removed_mm3"].get<double>() ==
-        Approx((180.0 + 3.14159265358979 * 9.0) * 2.0).epsilon(0.002));
+  CHECK(record["removed_mm3"].get<double>() == Approx((180.0 + kPi * 9.0) * 2.0).epsilon(0.002));
   CHECK(std::filesystem::exists(dir.path() / "out" / "batch.csv"));
 }
 
@@ -87,8 +87,7 @@ TEST_CASE("a batch runs a job again when its program changes, not otherwise", "[
   std::ifstream in(dir.path() / "out" / "jobs" / "slot" / "job.json");
   const auto record = nlohmann::json::parse(in);
   // 3 mm deep now: (30 x 6 + pi 3^2) x 3 mm^3, within the voxels' 0.2 % on a flat slot.
-  CHECK(record["removed_mm3"].get<double>() ==
-        Approx((180.0 + 3.14159265358979 * 9.0) * 3.0).epsilon(0.002));
+  CHECK(record["removed_mm3"].get<double>() == Approx((180.0 + kPi * 9.0) * 3.0).epsilon(0.002));
 }
 
 TEST_CASE("one job alone, fewer files, and a merge that lists what is missing", "[run]") {
@@ -123,7 +122,7 @@ TEST_CASE("one job alone, fewer files, and a merge that lists what is missing", 
   CHECK(nlohmann::json::parse(in)["missing"] == nlohmann::json::array({"a"}));
 }
 
-TEST_CASE("a job another process holds is left to it; a stale lock of a dead process is not",
+TEST_CASE("a job another process holds is left to it, a stale lock of a dead process is not",
           "[run]") {
   test::TempFolder dir("batch_locks");
   dir.write("slot.ngc", test::slotProgram());

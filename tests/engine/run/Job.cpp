@@ -18,7 +18,7 @@ OptionValues slotJob(const std::string& program) {
   return {{"program", program},
           {"tool", "flat"},
           {"diameter", "6mm"},
-          {"stock", "box:40,-10,0,-10,10,-10"}};
+          {"stock", "box:-10,-10,-10,40,10,0"}};
 }
 
 /// The message makeJob throws for these values, or "" when it accepts them.
@@ -43,7 +43,6 @@ TEST_CASE("makeJob types every option in internal units", "[run]") {
   // Default voxel: D / 20 = 0.3 mm; default flutes 2.
   CHECK(job.voxel == Approx(0.3).epsilon(1e-12));
   CHECK(job.cutter.fluteCount() == 2);
-  // The box's corners are ordered, whatever order they were typed in.
   REQUIRE(job.stock.box);
   CHECK(job.stock.box->min.x() == -10.0);
   CHECK(job.stock.box->max.x() == 40.0);
@@ -106,6 +105,16 @@ TEST_CASE("makeJob refuses bad values, naming the option and the value", "[run]"
              Contains("--feed-min must not be negative, found '-1'"));
   CHECK_THAT(errorOf(sim, with("stock", "box:0,0,-10")),
              Contains("expected box:X0,Y0,Z0,X1,Y1,Z1 (six numbers), found 3"));
+  // A box the other way round is refused, naming the axis and the values as typed.
+  CHECK(errorOf(sim, with("stock", "box:30,5,0,-5,-5,-5")) ==
+        "--stock box: expected X0 below X1 (box:X0,Y0,Z0,X1,Y1,Z1, the low corner first), found "
+        "X0 = 30 mm and X1 = -5 mm in 'box:30,5,0,-5,-5,-5'");
+  CHECK_THAT(errorOf(sim, with("stock", "box:0,0,0,10,10,0")), Contains("expected Z0 below Z1"));
+  // Several missing options are named together.
+  OptionValues bare{{"program", program}};
+  CHECK(errorOf(sim, bare) == "--tool (or --tools) and --stock are required");
+  bare["tool"] = "flat";
+  CHECK(errorOf(sim, bare) == "--diameter and --stock are required");
   CHECK_THAT(errorOf(sim, with("diameter", "")), Contains("--diameter is required"));
   CHECK_THAT(errorOf(sim, with("corner-radius", "1mm")),
              Contains("--corner-radius does not apply to a flat cutter"));
@@ -146,6 +155,12 @@ TEST_CASE("the report units change the reports only, not how bare numbers are re
   CHECK(job.stock.box->max.x() == 40.0);
   CHECK(job.voxel == Approx(0.25).epsilon(1e-12));
   CHECK(job.cutter.radius() == Approx(3.0).epsilon(1e-12));
+  // "inch" is a name of the unit here as everywhere else.
+  v["units"] = "inch";
+  CHECK(makeJob(JobCommand::Simulate, v).units == UnitSystem::Inch);
+  v["units"] = "furlong";
+  CHECK_THROWS_WITH(makeJob(JobCommand::Simulate, v),
+                    Catch::Matchers::Contains("--units: expected mm, in or inch"));
 }
 
 TEST_CASE("makeJob gives each tool of a program its cutter, or says which one it lacks",
@@ -157,8 +172,8 @@ TEST_CASE("makeJob gives each tool of a program its cutter, or says which one it
   OptionValues one = slotJob(program);
   // One --tool for a program that changes tools would sweep the wrong cutter silently.
   CHECK_THAT(errorOf(sim, one),
-             Contains("the program changes tools (T1 from line 8, T2 from line 16, T3 from "
-                      "line 24) and --tool gives one cutter"));
+             Contains("the program changes tools (T1 from line 6, T2 from line 14, T3 from "
+                      "line 22) and --tool gives one cutter"));
   OptionValues lib = {
       {"program", program}, {"tools", tools + "three_tools.tbl"}, {"stock", "box:0,0,-10,60,40,0"}};
   const Job job = makeJob(sim, lib);
@@ -171,10 +186,10 @@ TEST_CASE("makeJob gives each tool of a program its cutter, or says which one it
 
   test::TempFolder dir("job_tools");
   lib["tools"] = dir.write("two.tbl", "T1 D6 ;flat\nT2 D4 ;ball\n");
-  CHECK_THAT(errorOf(sim, lib), Contains("three_tools.ngc:24: T3: " + dir.path().string() +
+  CHECK_THAT(errorOf(sim, lib), Contains("three_tools.ngc:22: T3: " + dir.path().string() +
                                          "/two.tbl: no tool T3 (it has T1, T2)"));
   lib["tools"] = dir.write("bad.tbl", "T1 D6 ;flat\nT2 D4 ;ball\nT3 D6 ;vbit\n");
-  CHECK_THAT(errorOf(sim, lib), Contains("three_tools.ngc:24: T3: tool T3 (vbit) at"));
+  CHECK_THAT(errorOf(sim, lib), Contains("three_tools.ngc:22: T3: tool T3 (vbit) at"));
   CHECK_THAT(errorOf(sim, lib), Contains("without angle="));
   // A program that loads no tool runs with --tool; --tools alone cannot say which.
   const std::string plain = dir.write("slot.ngc", test::slotProgram());

@@ -4,6 +4,7 @@
 #include "engine/run/Pipeline.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "engine/run/RunOutputs.h"
 #include "engine/run/StepsTable.h"
 #include "engine/run/Summary.h"
@@ -20,8 +21,6 @@
 using namespace engage;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 OptionValues slotJob(const std::string& program) {
   return {{"program", program},
@@ -42,7 +41,7 @@ TEST_CASE("the pipeline measures a slot as its closed form", "[run]") {
   const RunResult r = runJob(makeJob(JobCommand::Simulate, slotJob(program)));
   REQUIRE(r.stock);
   // The slot: the stadium 30 x 6 mm plus a 3 mm disc, 2 mm deep. The default (dexel) stock is
-  // within 0.5 % per step of closed forms at the default spacing (README, accuracy); the total
+  // within 0.5 % per step of closed forms at the default spacing (docs/accuracy.md); the total
   // of a flat slot far tighter: 0.2 % allows for the rim of 0.3 mm columns.
   const double slot = (30.0 * 6.0 + kPi * 9.0) * 2.0;
   CHECK(r.sim.removed == Approx(slot).epsilon(0.002));

@@ -117,6 +117,43 @@ TEST_CASE("a run's page carries its summary, its steps and its cut surface", "[r
   CHECK(top > 10);
 }
 
+TEST_CASE("an inch run's page has its surface and its steps both in inches", "[run][report]") {
+  test::TempFolder dir("run_report_inch");
+  const std::string program =
+      dir.write("slot.ngc", "G20 G90 G17\nG0 X0 Y0 Z0.2\nG1 Z-0.08 F4\nG1 X1.2 F24\nG0 Z0.2\nM2\n");
+  // Bare numbers in the program's units: the stock is 2 x 0.8 x 0.4 in.
+  const RunResult r =
+      runJob(makeJob(JobCommand::Simulate, {{"program", program},
+                                            {"tool", "flat"},
+                                            {"diameter", "0.25in"},
+                                            {"stock", "box:-0.4,-0.4,-0.4,1.6,0.4,0"}}));
+  const std::string summary = summaryJson(r);
+  const json data = pageData(
+      runReportHtml(r, summary, reportSteps(r, summary), WrittenOutputs{}, StockView(r).voxels()));
+  const auto positions = decoded<float>(data["surface"]["positions"]);
+  REQUIRE(positions.size() >= 3);
+  float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    lo[i % 3] = std::min(lo[i % 3], positions[i]);
+    hi[i % 3] = std::max(hi[i % 3], positions[i]);
+  }
+  // The mesh spans the stock box in inches, to a cell (D/20 = 0.0125 in) on each side.
+  const float cell = data["surface"]["cell"].get<float>();
+  CHECK(cell == Approx(0.0125).epsilon(1e-6));
+  const float box[2][3] = {{-0.4f, -0.4f, -0.4f}, {1.6f, 0.4f, 0.0f}};
+  for (int a = 0; a < 3; ++a) {
+    CHECK(std::abs(lo[a] - box[0][a]) <= cell);
+    CHECK(std::abs(hi[a] - box[1][a]) <= cell);
+  }
+  // The steps' positions are in inches too: the slot runs from X0 to X1.2.
+  const json& x = data["series"]["x"];
+  const auto [xmin, xmax] = std::minmax_element(
+      x.begin(), x.end(),
+      [](const json& p, const json& q) { return p.get<double>() < q.get<double>(); });
+  CHECK(xmin->get<double>() == Approx(0.0).margin(1e-9));
+  CHECK(xmax->get<double>() == Approx(1.2).epsilon(1e-9));
+}
+
 TEST_CASE("a long run's plots keep every bucket's extremes and the peaks", "[run][report]") {
   // 300 moves of 1 mm at feeds that jump about, cut into 0.01 mm steps: 30,000 steps, more
   // than kAllSteps. Without a stock (schedule --model analytic) the analytic MRR is stepover x

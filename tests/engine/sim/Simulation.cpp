@@ -3,6 +3,7 @@
 #include "engine/sim/Simulation.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "engine/gcode/GcodeReader.h"
 #include "stock/DexelStock.h"
 #include "stock/VoxelStock.h"
@@ -17,7 +18,6 @@
 using namespace engage;
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 std::string slotProgram() {
   // A plunge, then a 30 mm slot at 30 deg to the grid, 2 mm deep, at 600 mm/min.
@@ -67,7 +67,7 @@ TEST_CASE("a slot program: steps, steady MRR = D d F, and the volume balance", "
   CHECK(r.rapidRemoved == 0.0);
 }
 
-TEST_CASE("arcs are cut as arc pieces; the stock side decides concave or convex", "[sim]") {
+TEST_CASE("arcs are cut as arc pieces, the stock side decides concave or convex", "[sim]") {
   // A full circle of tool-centre radius 20 around a disc of stock of radius 18 (stepover 1
   // into it: convex), then around a hole of radius 22 in a block (concave).
   const AptCutter cutter = AptCutter::flat(6.0, 18.0);
@@ -217,7 +217,7 @@ TEST_CASE("analytic steps without a stock: the side from the stock's side of the
   CHECK_THROWS_AS(analyticSteps(path, cutter, o), ParameterError);
 }
 
-TEST_CASE("a retract from where the last step left its cutter removes nothing; others measure",
+TEST_CASE("a retract from where the last step left its cutter removes nothing, others measure",
           "[sim]") {
   // A ball end mill (D 6) ramps 0.042 mm down over 12 mm from 0.9 mm below the top face and
   // retracts straight up: the ramp's last step swept the cutter's body where the retract

@@ -19,7 +19,7 @@ TEST_CASE("steady cut of a flat end mill: straight, concave and convex side cuts
   // band; on an arc of tool-centre radius rho the band's centroid runs at (rho +- (r - s/2)) /
   // rho times the tip feed (concave: the stock outside, band at [rho + r - s, rho + r]).
   // Tolerance 0.5 %: the voxel stock's side-cut error at D/20 is 0.78 % per step worst case
-  // (README), here D/40 and the mean over about 30 steps.
+  // (docs/accuracy.md), here D/40 and the mean over about 30 steps.
   SECTION("straight") {
     const SteadyCut c = measureSteadyCut(flat, s, d, {}, F);
     CHECK(c.steps >= 20);

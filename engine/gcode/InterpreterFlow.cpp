@@ -1,0 +1,289 @@
+// O-word control flow (if/elseif/else, while, do, repeat, break, continue), O-word subroutines
+// and their files, and Fanuc/Haas M98/M99 subprograms.
+
+#include "engine/gcode/Interpreter.h"
+
+namespace engage::gcode {
+
+const std::vector<std::pair<int, std::string>>& Interpreter::labelEntries(const std::string& label,
+                                                                          int column) const {
+  const SourceFile& f = *files_[static_cast<std::size_t>(file_)];
+  const auto it = f.labels.find(label);
+  if (it == f.labels.end()) fail(column, "expected a known O-word label, found o" + label);
+  return it->second;
+}
+
+int Interpreter::findForward(const std::string& label, int from,
+                             std::initializer_list<const char*> keywords, int column,
+                             const char* expected) const {
+  for (const auto& [line, kw] : labelEntries(label, column))
+    if (line > from)
+      for (const char* k : keywords)
+        if (kw == k) return line;
+  fail(column, std::string("expected ") + expected + " for o" + label + ", found none");
+}
+
+int Interpreter::findBackward(const std::string& label, int from, const char* keyword,
+                              int column) const {
+  const auto& entries = labelEntries(label, column);
+  for (auto it = entries.rbegin(); it != entries.rend(); ++it)
+    if (it->first < from && it->second == keyword) return it->first;
+  fail(column, std::string("expected O-") + keyword + " opening o" + label + ", found none");
+}
+
+bool Interpreter::hasKeywordBefore(const std::string& label, int from, const char* keyword) const {
+  const SourceFile& f = *files_[static_cast<std::size_t>(file_)];
+  const auto it = f.labels.find(label);
+  if (it == f.labels.end()) return false;
+  for (const auto& [line, kw] : it->second)
+    if (line < from && kw == keyword) return true;
+  return false;
+}
+
+void Interpreter::controlFlow(const Block& b) {
+  const gcode::OWord& o = b.oword;
+  const std::string& k = o.keyword;
+  const int c = o.column;
+  if (k == "sub") {
+    line_ = findForward(o.label, line_, {"endsub"}, c, "O-endsub") + 1;
+  } else if (k == "endsub" || k == "return") {
+    if (frames_.empty() || frames_.back().m98)
+      fail(c, "expected to be inside a called subroutine, found O-" + k);
+    if (!o.arguments.empty()) globals_["_value"] = o.arguments[0];
+    Frame f = std::move(frames_.back());
+    frames_.pop_back();
+    for (std::size_t i = 0; i < 30; ++i)
+      params_[i + 1] = f.saved[i];
+    file_ = f.file;
+    line_ = f.returnLine;
+  } else if (k == "call") {
+    call(o);
+  } else if (k == "do") {
+    ++line_;
+  } else if (k == "while") {
+    const bool cond = o.arguments[0] != 0.0;
+    if (hasKeywordBefore(o.label, line_, "do")) {
+      // The tail of a do-while loop.
+      line_ = cond ? findBackward(o.label, line_, "do", c) + 1 : line_ + 1;
+    } else {
+      line_ = cond ? line_ + 1 : findForward(o.label, line_, {"endwhile"}, c, "O-endwhile") + 1;
+    }
+  } else if (k == "endwhile") {
+    line_ = findBackward(o.label, line_, "while", c);
+  } else if (k == "if") {
+    if (o.arguments[0] != 0.0) {
+      ++line_;
+    } else {
+      nextBranch(o.label, c);
+    }
+  } else if (k == "elseif") {
+    // Reached from inside a taken branch, or from nextBranch evaluating it.
+    line_ = findForward(o.label, line_, {"endif"}, c, "O-endif") + 1;
+  } else if (k == "else") {
+    line_ = findForward(o.label, line_, {"endif"}, c, "O-endif") + 1;
+  } else if (k == "endif") {
+    ++line_;
+  } else if (k == "repeat") {
+    const long count = std::lround(o.arguments[0]);
+    const auto key = std::make_pair(file_, line_);
+    if (count <= 0) {
+      repeats_.erase(key);
+      line_ = findForward(o.label, line_, {"endrepeat"}, c, "O-endrepeat") + 1;
+    } else {
+      repeats_[key] = count;
+      ++line_;
+    }
+  } else if (k == "endrepeat") {
+    const int start = findBackward(o.label, line_, "repeat", c);
+    const auto key = std::make_pair(file_, start);
+    auto it = repeats_.find(key);
+    if (it != repeats_.end() && --it->second > 0) {
+      line_ = start + 1;
+    } else {
+      if (it != repeats_.end()) repeats_.erase(it);
+      ++line_;
+    }
+  } else if (k == "break" || k == "continue") {
+    loopJump(o.label, k == "break", c);
+  }
+}
+
+void Interpreter::nextBranch(const std::string& label, int column) {
+  int at = line_;
+  for (;;) {
+    const int next = findForward(label, at, {"elseif", "else", "endif"}, column, "O-endif");
+    const std::string& text =
+        files_[static_cast<std::size_t>(file_)]->lines[static_cast<std::size_t>(next)];
+    std::string l;
+    std::string kw;
+    gcode::peekOWord(text, l, kw);
+    if (kw == "elseif") {
+      const int saved = line_;
+      line_ = next;
+      Block b;
+      try {
+        b = gcode::parseLine(text, *this);
+      } catch (const ParseFailure& e) {
+        fail(e.column, e.message);
+      }
+      line_ = saved;
+      if (b.oword.arguments[0] != 0.0) {
+        line_ = next + 1;
+        return;
+      }
+      at = next;
+      continue;
+    }
+    line_ = next + 1;  // into the else branch, or past endif
+    return;
+  }
+}
+
+void Interpreter::loopJump(const std::string& label, bool isBreak, int column) {
+  // The loop this label belongs to: while/endwhile, do/while, repeat/endrepeat.
+  const auto& entries = labelEntries(label, column);
+  int open = -1;
+  std::string openKw;
+  for (const auto& [line, kw] : entries)
+    if (line < line_ && (kw == "while" || kw == "do" || kw == "repeat")) {
+      open = line;
+      openKw = kw;
+    }
+  if (open < 0)
+    fail(column, "expected to be inside an o" + label + " loop, found O-" +
+                     std::string(isBreak ? "break" : "continue"));
+  if (openKw == "repeat") {
+    const int close = findForward(label, line_, {"endrepeat"}, column, "O-endrepeat");
+    if (isBreak) {
+      repeats_.erase(std::make_pair(file_, open));
+      line_ = close + 1;
+    } else {
+      line_ = close;
+    }
+  } else if (openKw == "do") {
+    const int close = findForward(label, line_, {"while"}, column, "O-while");
+    line_ = isBreak ? close + 1 : close;
+  } else {
+    const int close = findForward(label, line_, {"endwhile"}, column, "O-endwhile");
+    line_ = isBreak ? close + 1 : open;
+  }
+}
+
+std::pair<int, int> Interpreter::findLabel(const std::string& label, const char* keyword,
+                                           const std::string& fileName, bool wholeFile) {
+  int targetFile = -1;
+  int targetLine = -1;
+  auto findIn = [&](int fi) {
+    const SourceFile& f = *files_[static_cast<std::size_t>(fi)];
+    const auto it = f.labels.find(label);
+    if (it == f.labels.end()) return false;
+    for (const auto& [line, kw] : it->second)
+      if (kw == keyword) {
+        targetFile = fi;
+        targetLine = line;
+        return true;
+      }
+    return false;
+  };
+  if (findIn(file_) || findIn(0)) return {targetFile, targetLine};
+  for (int fi = 1; fi < static_cast<int>(files_.size()); ++fi)
+    if (findIn(fi)) return {targetFile, targetLine};
+  if (fileName.empty()) return {-1, -1};
+  std::vector<std::string> folders{files_[0]->folder};
+  folders.insert(folders.end(), options_.subroutinePath.begin(), options_.subroutinePath.end());
+  for (const std::string& folder : folders) {
+    const std::filesystem::path p =
+        folder.empty() ? std::filesystem::path(fileName) : std::filesystem::path(folder) / fileName;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(p, ec)) continue;
+    files_.push_back(makeSource(p.string(), readFile(p.string())));
+    out_.files.push_back(p.string());
+    const int fi = static_cast<int>(files_.size()) - 1;
+    if (findIn(fi)) return {targetFile, targetLine};
+    return wholeFile ? std::pair<int, int>{fi, -1} : std::pair<int, int>{-1, -1};
+  }
+  return {-1, -1};
+}
+
+std::pair<int, int> Interpreter::findSubroutine(const std::string& label, int column) {
+  const bool named = label.size() > 2 && label.front() == '<';
+  const auto found =
+      findLabel(label, "sub", named ? label.substr(1, label.size() - 2) + ".ngc" : "", false);
+  if (found.first < 0)
+    fail(column, "expected a subroutine o" + label + " (in this program or as " +
+                     (label.front() == '<' ? label.substr(1, label.size() - 2) : label) +
+                     ".ngc beside it), found none");
+  return found;
+}
+
+void Interpreter::call(const gcode::OWord& o) {
+  const auto [targetFile, targetLine] = findSubroutine(o.label, o.column);
+  if (frames_.size() >= 64)
+    fail(o.column, "expected subroutine calls nested at most 64 deep, found deeper recursion");
+  Frame f;
+  f.file = file_;
+  f.returnLine = line_ + 1;
+  for (std::size_t i = 0; i < 30; ++i) {
+    f.saved[i] = params_[i + 1];
+    params_[i + 1] = i < o.arguments.size() ? o.arguments[i] : 0.0;
+  }
+  frames_.push_back(std::move(f));
+  file_ = targetFile;
+  line_ = targetLine + 1;
+}
+
+void Interpreter::subprogramCall(const Words& w) {
+  const int column = w.mColumn(M_98);
+  if (!w.has('P')) fail(column, "expected a P word (the program number) with M98, found none");
+  const double pv = w.get('P');
+  if (!(pv >= 0.0) || std::abs(pv - std::round(pv)) > 1e-9 || pv > 1e9)
+    fail(w.column('P'), "expected a program number P with M98, found P" + formatNumber(pv));
+  long program = std::lround(pv);
+  long times = 1;
+  if (w.has('L')) {
+    const double l = w.get('L');
+    if (!(l >= 0.0) || std::abs(l - std::round(l)) > 1e-9 || l > 1e9)
+      fail(w.column('L'), "expected a repeat count L with M98, found L" + formatNumber(l));
+    times = std::lround(l);
+  } else if (options_.dialect == Dialect::Fanuc && program > 9999) {
+    times = program / 10000;
+    program %= 10000;
+  }
+  if (times == 0) return;
+  const std::string label = std::to_string(program);
+  const auto [targetFile, targetLine] = findLabel(label, "program", label + ".ngc", true);
+  if (targetFile < 0)
+    fail(w.column('P'), "expected a subprogram O" + label + " (in this program or as " + label +
+                            ".ngc beside it), found none");
+  if (frames_.size() >= 64)
+    fail(column, "expected subprogram calls nested at most 64 deep, found deeper recursion");
+  Frame f;
+  f.file = file_;
+  f.returnLine = line_ + 1;
+  f.m98 = true;
+  f.startFile = targetFile;
+  f.startLine = targetLine;
+  f.repeats = times - 1;
+  frames_.push_back(std::move(f));
+  file_ = targetFile;
+  line_ = targetLine;  // (the run loop goes on with the next line)
+}
+
+void Interpreter::subprogramReturn(int column) {
+  Frame& f = frames_.back();
+  if (!f.m98)
+    fail(column,
+         "expected M99 only in a subprogram an M98 called, found it in an O-word "
+         "subroutine (end that with O-endsub)");
+  if (f.repeats > 0) {
+    --f.repeats;
+    file_ = f.startFile;
+    line_ = f.startLine;
+    return;
+  }
+  file_ = f.file;
+  line_ = f.returnLine - 1;
+  frames_.pop_back();
+}
+
+}  // namespace engage::gcode

@@ -1,0 +1,100 @@
+#pragma once
+/// \file VoxelGrid.h
+/// What the voxel stock's source files share (private to stock/, never included outside it:
+/// it includes OpenVDB): the grid types, the leaf key, the stock's state (VoxelStock::Impl),
+/// and the helpers that construction (VoxelStock.cpp), the files (VoxelStockFiles.cpp) and the
+/// surface (VoxelSurface.cpp) each use.
+
+#include "cutters/AptCutter.h"
+#include "stock/TriangleMesh.h"
+#include "stock/VoxelPlanes.h"
+#include "stock/VoxelStock.h"
+
+#include <openvdb/openvdb.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace engage::voxel {
+
+using openvdb::Coord;
+using openvdb::CoordBBox;
+using openvdb::FloatGrid;
+using openvdb::Int32Grid;
+using Leaf = FloatGrid::TreeType::LeafNodeType;
+static_assert(Leaf::SIZE == kLeafVoxels, "VoxelPlanes.h counts the voxels of OpenVDB's leaf");
+constexpr int kLeafDim = static_cast<int>(Leaf::DIM);  // 8
+
+/// OpenVDB's initialize(), once per process.
+void initVdb();
+
+/// Refuse, before allocating, a grid whose voxels could not all be held (VoxelStock::memoryBound
+/// against three quarters of the physical memory). Throws ParameterError naming the voxel size.
+void checkMemory(const Box3& box, double h);
+
+/// Voxels of a grid of size h over `box`, with a voxel's margin on each side.
+double voxelCount(const Box3& box, double h);
+
+/// The key of the leaf holding voxel ijk (its coordinates divided by the leaf's 8, floored).
+inline std::uint64_t leafKey(const Coord& origin) {
+  auto part = [](int v) { return static_cast<std::uint64_t>(v >> 3) & 0x1FFFFFu; };
+  return part(origin.x()) | part(origin.y()) << 21 | part(origin.z()) << 42;
+}
+
+/// The 0.5 iso-surface of a fraction grid as a triangle mesh with outward normals; OpenVDB's
+/// `adaptivity` (0: none) merges cells where the surface is nearly flat.
+TriangleMesh isoSurface(const FloatGrid& grid, double adaptivity);
+
+/// The stock's surface as a narrow-band level set (negative inside, within `halfWidth` voxels
+/// of it) of the fractions' 0.5 iso-surface, from the surface's mesh points (VoxelSurface.cpp).
+FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
+                               const std::vector<std::array<float, 3>>& points);
+
+}  // namespace engage::voxel
+
+namespace engage {
+
+struct VoxelStock::Impl {
+  double h = 1.0;
+  voxel::FloatGrid::Ptr grid;
+  bool capture = false;
+  voxel::FloatGrid::Ptr removed;
+  voxel::Int32Grid::Ptr step;
+  voxel::FloatGrid::Ptr mrr;
+  /// Planes of the partial voxels, per leaf (by leafKey of its origin).
+  std::unordered_map<std::uint64_t, voxel::LeafPlanes> planes;
+  /// The box the stock was made from, if it was: its shell voxels' planes are its faces.
+  std::optional<Box3> box;
+  /// Removals so far: the serial number of the planes a removal makes.
+  int removals = 0;
+  /// The fractions' 0.5 iso-surface as last meshed, after `surfaceAt` removals: stock.vdb's
+  /// level set and stock.stl share it, so that the stock is meshed once for both. Made
+  /// once when the files are written side by side (a run's outputs, on several cores).
+  std::shared_ptr<const TriangleMesh> surface;
+  int surfaceAt = -1;
+  std::mutex surfaceMutex;
+
+  std::shared_ptr<const TriangleMesh> surfaceMesh() {
+    const std::lock_guard<std::mutex> lock(surfaceMutex);
+    if (!surface || surfaceAt != removals) {
+      surface = std::make_shared<const TriangleMesh>(voxel::isoSurface(*grid, 0.0));
+      surfaceAt = removals;
+    }
+    return surface;
+  }
+
+  voxel::Coord index(const Eigen::Vector3d& p) const {
+    return voxel::Coord(static_cast<int>(std::floor(p.x() / h + 0.5)),
+                        static_cast<int>(std::floor(p.y() / h + 0.5)),
+                        static_cast<int>(std::floor(p.z() / h + 0.5)));
+  }
+};
+
+}  // namespace engage

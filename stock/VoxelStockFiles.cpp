@@ -1,0 +1,766 @@
+// The voxel stock's files and conversions: stock.vdb (fractions, planes, the surface level set)
+// written and read back (on the same grid, or resampled by overlap onto another), removed.vdb,
+// and the dexel stock as voxels (fromDexels, dexelsFromVdb).
+
+#include "stock/VoxelStock.h"
+
+#include "cutters/Error.h"
+#include "cutters/Numbers.h"
+#include "stock/AtomicFile.h"
+#include "stock/CubeClip.h"
+#include "stock/DexelStock.h"
+#include "stock/TriangleMesh.h"
+#include "stock/VoxelCut.h"
+#include "stock/VoxelGrid.h"
+#include "stock/VoxelPlanes.h"
+
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/ChangeBackground.h>
+#include <openvdb/tools/FastSweeping.h>
+#include <openvdb/tools/GridTransformer.h>
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/LevelSetUtil.h>
+#include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/Prune.h>
+#include <openvdb/tools/SignedFloodFill.h>
+#include <openvdb/tools/ValueTransformer.h>
+#include <openvdb/tools/VolumeToMesh.h>
+
+#include <tbb/parallel_for.h>
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <mutex>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+namespace engage {
+using namespace voxel;
+namespace {
+
+/// OpenVDB's io::File writes through a stream it never checks after opening: on a full disk it
+/// leaves a short file and reports nothing. The same seekable layout (Archive::write with grid
+/// offsets, as io::File writes it) goes here through a stream of ours, checked after every
+/// stage, into PATH.part, renamed into place when complete.
+class CheckedArchive : public openvdb::io::Archive {
+ public:
+  void writeTo(std::ostream& os, const openvdb::GridPtrVec& grids) const {
+    write(os, grids, /*seekable=*/true);
+  }
+};
+
+void writeVdb(const std::string& path, const openvdb::GridPtrVec& grids) {
+  writeFileAtomically(path, [&](std::ostream& os) { CheckedArchive().writeTo(os, grids); });
+}
+
+/// How a dexel stock's columns lie on voxel columns of the same spacing h: dexel column (i, j)
+/// covers [x0 + i h, x0 + (i + 1) h] (and likewise in y), voxel c covers [(c - 1/2) h,
+/// (c + 1/2) h], so each dexel column overlaps four voxel columns and each voxel column
+/// (cx + a, cy + b) the dexel columns a - 1 .. a, b - 1 .. b.
+struct ColumnFootprint {
+  int cx = 0, cy = 0;         // the first voxel column of dexel column (0, 0); the others + 1
+  double wx = 0.0, wy = 0.0;  // the share of a dexel column in its first voxel column's x (y)
+
+  explicit ColumnFootprint(const DexelStock& d) {
+    const double h = d.resolution();
+    auto first = [&](double a0, int& c0, double& w0) {  // the voxels over [a0, a0 + h]
+      c0 = static_cast<int>(std::floor(a0 / h + 0.5));
+      w0 = ((c0 + 0.5) * h - a0) / h;
+    };
+    first(d.originX(), cx, wx);
+    first(d.originY(), cy, wy);
+  }
+  /// The share of a dexel column in the voxel column (a, b) of its four, a and b 0 or 1.
+  double share(int a, int b) const { return (a ? 1.0 - wx : wx) * (b ? 1.0 - wy : wy); }
+  /// fn(i, j, share) for each dexel column of `d` that voxel column (cx + a, cy + b) overlaps,
+  /// with the share of that dexel column in it, where it is above 0.
+  template <typename Fn>
+  void columnsOf(const DexelStock& d, int a, int b, Fn&& fn) const {
+    for (int di = 0; di < 2; ++di)
+      for (int dj = 0; dj < 2; ++dj) {
+        const int i = a - di, j = b - dj;
+        if (i < 0 || i >= d.raysX() || j < 0 || j >= d.raysY()) continue;
+        const double s = share(di, dj);
+        if (s > 0.0) fn(i, j, s);
+      }
+  }
+};
+
+/// The outward normal of the material at voxel c from its neighbours' fractions (central
+/// differences), zero where they do not change.
+Eigen::Vector3d fractionNormal(const FloatGrid::ConstAccessor& acc, const Coord& c) {
+  Eigen::Vector3d g;
+  for (int a = 0; a < 3; ++a) {
+    Coord e(0);
+    e[a] = 1;
+    g[a] = static_cast<double>(acc.getValue(c - e)) - static_cast<double>(acc.getValue(c + e));
+  }
+  const double n = g.norm();
+  return n > 1e-9 ? Eigen::Vector3d(g / n) : Eigen::Vector3d::Zero();
+}
+
+/// stock.vdb keeps each partial voxel's planes (so that a later run goes on from them as this
+/// one would), in two Vec3s grids "planes_0" and "planes_1": a plane {u : n . u <= a} (u in
+/// voxel sizes from the voxel's centre) as n (a + 2) (a lies within +-0.87 where a plane cuts
+/// the cube), none as 0, and the first as n (a + 6) when the material is inside either plane
+/// instead of both; a third, "planes_2", holds such a voxel's outer plane (0 where it has none).
+openvdb::Vec3s encodePlane(const HalfSpace& q, bool united) {
+  if (q.n.squaredNorm() == 0.0) return openvdb::Vec3s(0.0f);
+  const double r = std::clamp(q.a, -1.9, 1.9) + (united ? 6.0 : 2.0);
+  return openvdb::Vec3s(static_cast<float>(q.n.x() * r), static_cast<float>(q.n.y() * r),
+                        static_cast<float>(q.n.z() * r));
+}
+
+HalfSpace decodePlane(const openvdb::Vec3s& v, bool* united = nullptr) {
+  const double r = static_cast<double>(v.length());
+  if (united) *united = r > 4.0;
+  if (!(r > 0.5)) return HalfSpace{};
+  const Eigen::Vector3d n(static_cast<double>(v.x()) / r, static_cast<double>(v.y()) / r,
+                          static_cast<double>(v.z()) / r);
+  return HalfSpace{n, r - (r > 4.0 ? 6.0 : 2.0)};
+}
+
+/// The grids of a stock.vdb that a run starts from.
+struct StockFile {
+  FloatGrid::Ptr fractions;
+  /// The partial voxels' planes (both null for a file written without them), and their outer
+  /// planes (null for a file written before they were kept).
+  openvdb::Vec3SGrid::Ptr planes[3];
+};
+
+/// Grid "stock" of stock.vdb at `path`, checked: fractions 0 to 1 on a uniform grid whose
+/// index axes are the world's (a translation allowed); and its planes, if it has them.
+StockFile readStockGrid(const std::string& path) {
+  initVdb();
+  openvdb::Vec3SGrid::Ptr planes[3];
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw Error("cannot read stock '" + path +
+                "': " + (std::filesystem::exists(path, ec) ? "not a file" : "no such file"));
+  openvdb::GridBase::Ptr base;
+  std::string names;
+  try {
+    openvdb::io::File file(path);
+    file.open(false);
+    for (auto it = file.beginName(); it != file.endName(); ++it)
+      names += (names.empty() ? "" : ", ") + it.gridName();
+    if (file.hasGrid("stock")) base = file.readGrid("stock");
+    if (base && file.hasGrid("planes_0") && file.hasGrid("planes_1"))
+      for (int i = 0; i < 3; ++i)
+        if (i < 2 || file.hasGrid("planes_2"))
+          planes[i] = openvdb::gridPtrCast<openvdb::Vec3SGrid>(
+              file.readGrid("planes_" + std::to_string(i)));
+    file.close();
+  } catch (const openvdb::Exception& e) {
+    throw Error("cannot read stock '" + path + "' as an OpenVDB file: " + e.what());
+  }
+  if (!base)
+    throw ParameterError("stock '" + path +
+                         "' has no grid named 'stock' (the material fractions an engage run "
+                         "writes in stock.vdb); its grids: " +
+                         (names.empty() ? std::string("none") : names));
+  FloatGrid::Ptr grid = openvdb::gridPtrCast<FloatGrid>(base);
+  if (!grid)
+    throw ParameterError("grid 'stock' of '" + path + "' holds " + base->valueType() +
+                         " values, not float material fractions");
+  const openvdb::math::Transform& xf = grid->transform();
+  const openvdb::Vec3d o = xf.indexToWorld(openvdb::Vec3d(0.0));
+  const double h0 = xf.voxelSize()[0];
+  bool axes = xf.isLinear() && std::isfinite(h0) && h0 > 0.0;
+  for (int a = 0; a < 3 && axes; ++a) {
+    openvdb::Vec3d e(0.0);
+    e[a] = 1.0;
+    const openvdb::Vec3d d = xf.indexToWorld(e) - o;
+    for (int b = 0; b < 3; ++b)
+      axes = axes && std::abs(d[b] - (a == b ? h0 : 0.0)) <= 1e-9 * h0;
+  }
+  if (!axes)
+    throw ParameterError("grid 'stock' of '" + path +
+                         "' is not on cubic voxels along the world's axes (rotated, sheared or "
+                         "of unequal sizes)");
+  if (std::abs(grid->background()) > 1e-6f)
+    throw ParameterError("grid 'stock' of '" + path + "' has background " +
+                         formatNumber(grid->background()) +
+                         ", not 0 (air): not material fractions");
+  for (auto it = grid->cbeginValueOn(); it; ++it) {
+    const float v = *it;
+    if (!(v >= -1e-6f && v <= 1.0f + 1e-6f)) {
+      const Coord c = it.getCoord();
+      throw ParameterError("grid 'stock' of '" + path + "' holds " + formatNumber(v) +
+                           " at voxel (" + std::to_string(c.x()) + ", " + std::to_string(c.y()) +
+                           ", " + std::to_string(c.z()) + "): not a material fraction (0 to 1)");
+    }
+  }
+  StockFile f;
+  f.fractions = grid;
+  // Planes on another grid than the fractions' are not used.
+  if (planes[0] && planes[1] && planes[0]->transform() == xf && planes[1]->transform() == xf) {
+    f.planes[0] = planes[0];
+    f.planes[1] = planes[1];
+    if (planes[2] && planes[2]->transform() == xf) f.planes[2] = planes[2];
+  }
+  return f;
+}
+
+/// The accessors of a stock file's planes grids (none for a file without them; the outer
+/// planes' only where the file has them).
+std::vector<openvdb::Vec3SGrid::ConstAccessor> planeAccessors(const StockFile& file) {
+  std::vector<openvdb::Vec3SGrid::ConstAccessor> out;
+  for (int i = 0; i < 3 && file.planes[0]; ++i)
+    if (file.planes[i]) out.push_back(file.planes[i]->getConstAccessor());
+  return out;
+}
+
+/// The planes of voxel c of a stock file (`planes` its planeAccessors(), empty for none): from
+/// its planes grids, q[2] the outer plane of united ones (else keep-all), else (a file without
+/// them) the plane across the fractions' gradient that holds fraction m. Returns how many (0:
+/// none).
+int filePlanes(const FloatGrid::ConstAccessor& acc,
+               const std::vector<openvdb::Vec3SGrid::ConstAccessor>& planes, const Coord& c,
+               double m, HalfSpace q[3], bool& united) {
+  united = false;
+  q[2] = HalfSpace{};
+  if (!planes.empty()) {
+    q[0] = decodePlane(planes[0].getValue(c), &united);
+    q[1] = decodePlane(planes[1].getValue(c));
+    if (united && planes.size() > 2) q[2] = decodePlane(planes[2].getValue(c));
+    if (q[0].n.squaredNorm() > 0.0 || q[1].n.squaredNorm() > 0.0) return 2;
+  }
+  const Eigen::Vector3d n = fractionNormal(acc, c);
+  if (n.squaredNorm() == 0.0) return 0;
+  q[0] = planeLeaving(n, m);
+  q[1] = HalfSpace{};
+  return 1;
+}
+
+/// Tiles of a value below 1 become voxels: the removal takes tiles for whole material.
+void partialTilesToVoxels(FloatGrid& g) {
+  std::vector<std::pair<CoordBBox, float>> tiles;
+  for (auto it = g.cbeginValueOn(); it; ++it)
+    if (!it.isVoxelValue() && *it < 1.0f) tiles.emplace_back(it.getBoundingBox(), *it);
+  auto acc = g.getAccessor();
+  for (const auto& [box, v] : tiles)
+    for (auto c = box.begin(); c; ++c)
+      acc.setValue(*c, v);
+}
+
+/// Voxel c of a stock file's shell of an axis-aligned box (a stock box's faces, edges and
+/// corners that no cut touched): its material is a box at
+/// one corner of the voxel, [lo, hi] in the voxel's unit cube, each axis's cover the fraction
+/// m over that of its face neighbour on the material's side (1 along a face, where both
+/// neighbours hold m), the other neighbour empty along each covered axis. False where the
+/// fractions are not such a box (the covers' product not m): a cut's surface. Two planes
+/// cannot hold a corner's three faces: the plane across the fractions' gradient (a file
+/// without planes: a dexel run's) or two of the faces (a box's file) put up to half an old
+/// voxel of a corner's material above the top face when resampled, where a finishing
+/// program's first rapid from the stock's top corner then met it (0.014 mm^3 from a 0.3 mm
+/// stock at 0.17 mm: a collision, exit 5).
+bool shellBox(const FloatGrid::ConstAccessor& acc, const Coord& c, double m, double lo[3],
+              double hi[3]) {
+  double product = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    Coord e(0, 0, 0);
+    e[a] = 1;
+    const double fm = static_cast<double>(acc.getValue(c - e));
+    const double fp = static_cast<double>(acc.getValue(c + e));
+    const double inner = std::max(fm, fp);
+    if (!(inner > 0.0)) return false;
+    const double cover = std::min(1.0, m / inner);
+    if (cover < 1.0 - 1e-6 && std::min(fm, fp) != 0.0) return false;
+    lo[a] = fp >= fm ? 0.5 - cover : -0.5;
+    hi[a] = fp >= fm ? 0.5 : -0.5 + cover;
+    product *= cover;
+  }
+  return std::abs(product - m) <= 1e-5 * m;
+}
+
+/// A fraction within this of 0 or 1 after resampling is taken as 0 or 1 (float sums of
+/// shares), so regions of material stay tiles and are not partial voxels by rounding.
+constexpr double kResampleSnap = 1e-6;
+
+/// Whether `grid` has voxels of size h centred at multiples of h.
+bool onGrid(const FloatGrid& grid, double h) {
+  const double h0 = grid.transform().voxelSize()[0];
+  const openvdb::Vec3d o = grid.transform().indexToWorld(openvdb::Vec3d(0.0));
+  bool same = std::abs(h0 - h) <= 1e-9 * h;
+  for (int a = 0; a < 3; ++a)
+    same = same && std::abs(o[a]) <= 1e-9 * h;
+  return same;
+}
+
+/// The fractions of the file's grid on voxels of size h centred at multiples of h: a copy
+/// when the grid is already so, else resampled by overlap. Each old voxel gives each new voxel
+/// it overlaps the material inside their common box: all of it for a voxel of material; for a
+/// partial voxel the part inside its planes (filePlanes: the file's, else the plane across its
+/// fractions' gradient), clipped exactly (CubeClip.h) and scaled to its fraction. So the
+/// volume is kept, and a face between two old voxels stays there: spreading a partial voxel's
+/// material evenly put a top face's half-full voxels' material above the face, where rapids
+/// then met it.
+FloatGrid::Ptr resampledFractions(const StockFile& file, double h) {
+  const FloatGrid& grid = *file.fractions;
+  const double h0 = grid.transform().voxelSize()[0];
+  const openvdb::Vec3d o = grid.transform().indexToWorld(openvdb::Vec3d(0.0));
+  auto make = [&] {
+    FloatGrid::Ptr g = FloatGrid::create(0.0f);
+    g->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    g->setName("stock");
+    g->setGridClass(openvdb::GRID_FOG_VOLUME);
+    return g;
+  };
+  const CoordBBox bb = grid.evalActiveVoxelBoundingBox();
+  if (bb.empty()) return make();
+  Box3 world;
+  for (int a = 0; a < 3; ++a) {
+    world.min[a] = o[a] + (bb.min()[a] - 0.5) * h0;
+    world.max[a] = o[a] + (bb.max()[a] + 0.5) * h0;
+  }
+  checkMemory(world, h);
+  if (onGrid(grid, h)) {
+    FloatGrid::Ptr g = make();
+    g->setTree(grid.tree().copy());
+    partialTilesToVoxels(*g);
+    return g;
+  }
+  // The new voxels over the old grid's bounds, dense (x fastest), summed in doubles.
+  int lo[3], dim[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = static_cast<int>(std::floor(world.min[a] / h + 0.5));
+    dim[a] = static_cast<int>(std::floor(world.max[a] / h + 0.5)) - lo[a] + 1;
+  }
+  std::vector<double> sum(static_cast<std::size_t>(dim[0]) * static_cast<std::size_t>(dim[1]) *
+                          static_cast<std::size_t>(dim[2]));
+  const double scale = (h0 / h) * (h0 / h) * (h0 / h);  // an old voxel in new voxels
+  // Layer by layer of new voxels (each summed by one thread, in one order: the same result for
+  // any thread count), from the old voxels that overlap it.
+  tbb::parallel_for(0, dim[2], [&](int layer) {
+    auto acc = grid.getConstAccessor();
+    const std::vector<openvdb::Vec3SGrid::ConstAccessor> planes = planeAccessors(file);
+    const int z = lo[2] + layer;
+    const int k0 =
+        std::max(bb.min().z(), static_cast<int>(std::floor(((z - 0.5) * h - o[2]) / h0 + 0.5)));
+    const int k1 =
+        std::min(bb.max().z(), static_cast<int>(std::floor(((z + 0.5) * h - o[2]) / h0 + 0.5)));
+    for (int k = k0; k <= k1; ++k)
+      for (int j = bb.min().y(); j <= bb.max().y(); ++j)
+        for (int i = bb.min().x(); i <= bb.max().x(); ++i) {
+          const Coord c(i, j, k);
+          const double m = static_cast<double>(acc.getValue(c));
+          if (!(m > 0.0)) continue;
+          const Eigen::Vector3d centre(o[0] + i * h0, o[1] + j * h0, o[2] + k * h0);
+          // A partial voxel's material: inside its planes (both, or either when united, and
+          // its outer one), scaled to its fraction (the planes hold it to within kPlanesAgree).
+          HalfSpace q[3];
+          bool united = false;
+          const int count = m < 1.0 ? filePlanes(acc, planes, c, m, q, united) : 0;
+          // A box's shell voxel is its box (its file planes, if any, two of a corner's three
+          // faces).
+          double boxLo[3], boxHi[3];
+          const bool boxed = m < 1.0 && shellBox(acc, c, m, boxLo, boxHi);
+          auto inside = [&](const HalfSpace* clip, int clips) {
+            return materialShare(q, united, clip, clips, nullptr, &q[2]);
+          };
+          double factor = 0.0;
+          if (count > 0) {
+            const double held = inside(nullptr, 0);
+            if (held > 0.0 && std::abs(held - m) <= kPlanesAgree) factor = m / held;
+          }
+          int first[2], last[2];
+          for (int a = 0; a < 2; ++a) {
+            first[a] = static_cast<int>(std::floor((centre[a] - 0.5 * h0) / h + 0.5));
+            last[a] = static_cast<int>(std::floor((centre[a] + 0.5 * h0) / h + 0.5));
+          }
+          for (int y = first[1]; y <= last[1]; ++y)
+            for (int x = first[0]; x <= last[0]; ++x) {
+              const int n[3] = {x, y, z};
+              // The new voxel's box in the old voxel's unit cube.
+              double u0[3], u1[3], box = 1.0;
+              for (int a = 0; a < 3; ++a) {
+                u0[a] = std::max(-0.5, ((n[a] - 0.5) * h - centre[a]) / h0);
+                u1[a] = std::min(0.5, ((n[a] + 0.5) * h - centre[a]) / h0);
+                box *= std::max(0.0, u1[a] - u0[a]);
+              }
+              if (!(box > 0.0)) continue;
+              double share = m * box;
+              if (boxed) {
+                double held = 1.0, part = 1.0;
+                for (int a = 0; a < 3; ++a) {
+                  held *= boxHi[a] - boxLo[a];
+                  part *= std::max(0.0, std::min(u1[a], boxHi[a]) - std::max(u0[a], boxLo[a]));
+                }
+                share = part * m / held;
+              } else if (factor > 0.0) {
+                HalfSpace clip[6];
+                int clips = 0;
+                for (int a = 0; a < 3; ++a) {
+                  const Eigen::Vector3d e = Eigen::Vector3d::Unit(a);
+                  if (u0[a] > -0.5) clip[clips++] = HalfSpace{-e, -u0[a]};
+                  if (u1[a] < 0.5) clip[clips++] = HalfSpace{e, u1[a]};
+                }
+                share = inside(clip, clips) * factor;
+              }
+              sum[(static_cast<std::size_t>(layer) * static_cast<std::size_t>(dim[1]) +
+                   static_cast<std::size_t>(y - lo[1])) *
+                      static_cast<std::size_t>(dim[0]) +
+                  static_cast<std::size_t>(x - lo[0])] += share * scale;
+            }
+        }
+  });
+  FloatGrid::Ptr g = make();
+  auto acc = g->getAccessor();
+  for (int z = 0; z < dim[2]; ++z)
+    for (int y = 0; y < dim[1]; ++y)
+      for (int x = 0; x < dim[0]; ++x) {
+        double v = sum[(static_cast<std::size_t>(z) * static_cast<std::size_t>(dim[1]) +
+                        static_cast<std::size_t>(y)) *
+                           static_cast<std::size_t>(dim[0]) +
+                       static_cast<std::size_t>(x)];
+        if (v < kResampleSnap) continue;
+        if (v > 1.0 - kResampleSnap) v = 1.0;
+        acc.setValue(Coord(lo[0] + x, lo[1] + y, lo[2] + z), static_cast<float>(v));
+      }
+  g->tree().prune();
+  partialTilesToVoxels(*g);
+  return g;
+}
+
+}  // namespace
+
+VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
+  initVdb();
+  auto impl = std::make_unique<Impl>();
+  const double h = d.resolution();
+  impl->h = h;
+  impl->grid = FloatGrid::create(0.0f);
+  impl->grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+  impl->grid->setName("stock");
+  impl->grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+  // Each voxel gets the material of the columns it overlaps: volume share x the interval's
+  // share x the column's weight. Voxel column by voxel column, its four dexel columns' material
+  // per height summed in an array (as writeRemovedVdb merges their losses); the voxels below 1
+  // written one by one, and the run of full ones each 8 x 8 block of voxel columns shares as
+  // one box (tiles where it covers whole leaves), the rest of each run one by one: each
+  // voxel is written once, not added into from each of its columns.
+  const ColumnFootprint corner(d);
+  const int nx = d.raysX(), ny = d.raysY();
+  const int ax = nx + 1, by = ny + 1;  // voxel columns (corner.cx + a, corner.cy + b)
+  struct FullRun {
+    int k0 = 1, k1 = 0;  // [k0, k1] all 1; empty when k0 > k1
+  };
+  std::vector<FullRun> full(static_cast<std::size_t>(ax) * static_cast<std::size_t>(by));
+  auto acc = impl->grid->getAccessor();
+  std::vector<double> merged;
+  for (int b = 0; b < by; ++b)
+    for (int a = 0; a < ax; ++a) {
+      struct Part {
+        int i, j;
+        double share;
+      } parts[4];
+      int count = 0;
+      int kLow = std::numeric_limits<int>::max(), kHigh = std::numeric_limits<int>::min();
+      corner.columnsOf(d, a, b, [&](int i, int j, double inVoxel) {
+        const double share = inVoxel * d.weight(i, j);
+        const auto& ray = d.ray(i, j);
+        if (!(share > 0.0) || ray.empty()) return;
+        parts[count++] = {i, j, share};
+        kLow = std::min(kLow, static_cast<int>(std::floor(ray.front().z0 / h + 0.5)));
+        kHigh = std::max(kHigh, static_cast<int>(std::floor(ray.back().z1 / h + 0.5)));
+      });
+      if (count == 0) continue;
+      merged.assign(static_cast<std::size_t>(kHigh - kLow + 1), 0.0);
+      for (int p = 0; p < count; ++p)
+        for (const DexelStock::Interval& iv : d.ray(parts[p].i, parts[p].j))
+          DexelStock::voxelHeights(h, iv.z0, iv.z1, [&](int k, double z) {
+            merged[static_cast<std::size_t>(k - kLow)] += z * iv.f * parts[p].share;
+          });
+      FullRun& run = full[static_cast<std::size_t>(b) * static_cast<std::size_t>(ax) +
+                          static_cast<std::size_t>(a)];
+      for (int k = kLow; k <= kHigh; ++k) {
+        const auto v =
+            static_cast<float>(std::min(1.0, merged[static_cast<std::size_t>(k - kLow)]));
+        if (v == 1.0f && (run.k0 > run.k1 || run.k1 == k - 1)) {
+          if (run.k0 > run.k1) run.k0 = k;
+          run.k1 = k;  // (a column's first run of full voxels; later ones go one by one)
+        } else if (v > 0.0f) {
+          acc.setValue(Coord(corner.cx + a, corner.cy + b, k), v);
+        }
+      }
+    }
+  for (int b0 = 0; b0 < by; b0 += 8)
+    for (int a0 = 0; a0 < ax; a0 += 8) {
+      // The heights every column of the block is full at, as one box.
+      int k0 = std::numeric_limits<int>::min(), k1 = std::numeric_limits<int>::max();
+      for (int b = b0; b < std::min(by, b0 + 8); ++b)
+        for (int a = a0; a < std::min(ax, a0 + 8); ++a) {
+          const FullRun& run = full[static_cast<std::size_t>(b) * static_cast<std::size_t>(ax) +
+                                    static_cast<std::size_t>(a)];
+          k0 = std::max(k0, run.k0);
+          k1 = std::min(k1, run.k1);
+        }
+      if (k0 <= k1)
+        impl->grid->tree().fill(CoordBBox(Coord(corner.cx + a0, corner.cy + b0, k0),
+                                          Coord(corner.cx + std::min(ax, a0 + 8) - 1,
+                                                corner.cy + std::min(by, b0 + 8) - 1, k1)),
+                                1.0f, true);
+      acc.clear();  // (the box may have replaced nodes the accessor holds)
+      for (int b = b0; b < std::min(by, b0 + 8); ++b)
+        for (int a = a0; a < std::min(ax, a0 + 8); ++a) {
+          const FullRun& run = full[static_cast<std::size_t>(b) * static_cast<std::size_t>(ax) +
+                                    static_cast<std::size_t>(a)];
+          for (int k = run.k0; k <= run.k1; ++k)
+            if (k < k0 || k > k1) acc.setValue(Coord(corner.cx + a, corner.cy + b, k), 1.0f);
+        }
+    }
+  impl->grid->tree().prune();
+  return VoxelStock(std::move(impl));
+}
+
+void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
+  initVdb();
+  const double h = d.resolution();
+  auto make = [&](auto grid, const char* name) {
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    grid->setName(name);
+    return grid;
+  };
+  FloatGrid::Ptr removed = make(FloatGrid::create(0.0f), "removed");
+  removed->setGridClass(openvdb::GRID_FOG_VOLUME);
+  Int32Grid::Ptr step = make(Int32Grid::create(-1), "step");
+  FloatGrid::Ptr mrr = make(FloatGrid::create(0.0f), "mrr");
+  auto racc = removed->getAccessor();
+  auto sacc = step->getAccessor();
+  auto macc = mrr->getAccessor();
+  const std::vector<double>& stepMrr = d.stepMrr();
+  // Each voxel column's four dexel columns' losses (per voxel height) merged, then its voxels
+  // written, once each (rather than each column's losses added into four voxels' values).
+  struct Height {
+    double removed = 0.0;
+    int step = std::numeric_limits<int>::max();  // the first step to reach it
+  };
+  const ColumnFootprint corner(d);
+  const int nx = d.raysX(), ny = d.raysY();
+  std::vector<Height> merged;
+  for (int b = 0; b <= ny; ++b)
+    for (int a = 0; a <= nx; ++a) {
+      struct Part {
+        const DexelStock::LostColumn* column;
+        double share;
+      } parts[4];
+      int count = 0;
+      int kLow = std::numeric_limits<int>::max(), kHigh = std::numeric_limits<int>::min();
+      corner.columnsOf(d, a, b, [&](int i, int j, double share) {
+        const DexelStock::LostColumn* c = d.removedColumn(i, j);
+        if (!c || c->cells.empty()) return;
+        parts[count++] = {c, share};
+        kHigh = std::max(kHigh, c->top);
+        kLow = std::min(kLow, c->top - static_cast<int>(c->cells.size()) + 1);
+      });
+      if (count == 0) continue;
+      merged.assign(static_cast<std::size_t>(kHigh - kLow + 1), Height{});
+      for (int p = 0; p < count; ++p) {
+        const DexelStock::LostColumn& c = *parts[p].column;
+        for (std::size_t n = 0; n < c.cells.size(); ++n) {
+          const DexelStock::Lost& from = c.cells[n];
+          if (from.step < 0) continue;
+          Height& to = merged[static_cast<std::size_t>(c.top - kLow) - n];
+          to.removed += static_cast<double>(from.share) * parts[p].share;
+          to.step = std::min(to.step, static_cast<int>(from.step));
+        }
+      }
+      for (int k = kLow; k <= kHigh; ++k) {
+        const Height& at = merged[static_cast<std::size_t>(k - kLow)];
+        if (at.step == std::numeric_limits<int>::max()) continue;
+        const Coord c(corner.cx + a, corner.cy + b, k);
+        racc.setValue(c, static_cast<float>(std::min(1.0, at.removed)));
+        sacc.setValue(c, at.step);
+        const auto s = static_cast<std::size_t>(at.step);
+        macc.setValue(c, static_cast<float>(s < stepMrr.size() ? stepMrr[s] : 0.0));
+      }
+    }
+  writeVdb(path, openvdb::GridPtrVec{removed, step, mrr});
+}
+
+VoxelStock VoxelStock::fromVdb(const std::string& path, double h) {
+  const StockFile file = readStockGrid(path);
+  auto impl = std::make_unique<Impl>();
+  impl->h = h;
+  impl->grid = resampledFractions(file, h);
+  if (impl->grid->activeVoxelCount() == 0)
+    throw ParameterError("stock '" + path + "' holds no material");
+  // Each partial voxel: on the file's own grid, the planes the file keeps. Resampled, the
+  // planes of the old partial voxel that overlaps it most, moved into its frame, where they
+  // hold its fraction (to kPlanesAgree: a flat face stays flat across the new grid); else
+  // the plane across the fractions' gradient that holds its fraction. (The gradient plane
+  // alone, at the stock box's edges, put material above its top face, which a rapid from
+  // the top then met.)
+  const bool same = onGrid(*file.fractions, h);
+  const std::vector<openvdb::Vec3SGrid::ConstAccessor> planes = planeAccessors(file);
+  const FloatGrid::ConstAccessor oldAcc = file.fractions->getConstAccessor();
+  const double h0 = file.fractions->transform().voxelSize()[0];
+  const openvdb::Vec3d o = file.fractions->transform().indexToWorld(openvdb::Vec3d(0.0));
+  auto acc = impl->grid->getConstAccessor();
+  for (auto it = impl->grid->cbeginValueOn(); it; ++it) {
+    const double m = static_cast<double>(*it);
+    if (!it.isVoxelValue() || !(m < 1.0)) continue;
+    const Coord c = it.getCoord();
+    HalfSpace q[3];
+    bool united = false;
+    int count = 0;
+    if (same) {
+      count = filePlanes(acc, planes, c, m, q, united);
+    } else {
+      // The old partial voxel with the largest overlap.
+      const Eigen::Vector3d centre(c.x() * h, c.y() * h, c.z() * h);
+      Coord lo, hi;
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = static_cast<int>(std::floor((centre[a] - 0.5 * h - o[a]) / h0 + 0.5));
+        hi[a] = static_cast<int>(std::floor((centre[a] + 0.5 * h - o[a]) / h0 + 0.5));
+      }
+      double best = 0.0;
+      for (auto oc = CoordBBox(lo, hi).begin(); oc; ++oc) {
+        const double mo = static_cast<double>(oldAcc.getValue(*oc));
+        if (!(mo > 0.0 && mo < 1.0)) continue;
+        const Eigen::Vector3d oldCentre(o[0] + (*oc).x() * h0, o[1] + (*oc).y() * h0,
+                                        o[2] + (*oc).z() * h0);
+        double overlap = 1.0;
+        for (int a = 0; a < 3; ++a)
+          overlap *= std::max(0.0, std::min(centre[a] + 0.5 * h, oldCentre[a] + 0.5 * h0) -
+                                       std::max(centre[a] - 0.5 * h, oldCentre[a] - 0.5 * h0));
+        if (!(overlap > best)) continue;
+        HalfSpace oq[3];
+        bool ou = false;
+        if (filePlanes(oldAcc, planes, *oc, mo, oq, ou) == 0) continue;
+        // n . (x - old centre) <= a h0, with x = centre + u h.
+        HalfSpace moved[3];
+        for (int i = 0; i < 3; ++i)
+          moved[i] = oq[i].n.squaredNorm() == 0.0
+                         ? oq[i]
+                         : HalfSpace{oq[i].n, (oq[i].a * h0 - oq[i].n.dot(centre - oldCentre)) / h};
+        const double held = materialShare(moved, ou, nullptr, 0, nullptr, &moved[2]);
+        if (!(held > 0.0 && std::abs(held - m) <= kPlanesAgree)) continue;
+        best = overlap;
+        for (int i = 0; i < 3; ++i)
+          q[i] = moved[i];
+        united = ou;
+        count = 2;
+      }
+      if (count == 0) count = filePlanes(acc, {}, c, m, q, united);
+    }
+    if (count == 0) continue;  // (the fraction rule for this one)
+    impl->planes[leafKey(c)].set(Leaf::coordToOffset(c), q[0], kStockFace, q[1], kStockFace,
+                                 std::numeric_limits<double>::quiet_NaN(), united,
+                                 united ? q[2] : HalfSpace{});
+  }
+  return VoxelStock(std::move(impl));
+}
+
+DexelStock VoxelStock::dexelsFromVdb(const std::string& path, double h) {
+  const FloatGrid::Ptr grid = resampledFractions(readStockGrid(path), h);
+  const CoordBBox bb = grid->evalActiveVoxelBoundingBox();
+  if (bb.empty()) throw ParameterError("stock '" + path + "' holds no material");
+  const int nx = bb.dim().x(), ny = bb.dim().y();
+  std::vector<std::vector<DexelStock::Interval>> rays(static_cast<std::size_t>(nx) *
+                                                      static_cast<std::size_t>(ny));
+  tbb::parallel_for(0, ny, [&](int j) {
+    auto acc = grid->getConstAccessor();
+    for (int i = 0; i < nx; ++i) {
+      auto& ray = rays[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
+                       static_cast<std::size_t>(i)];
+      for (int k = bb.min().z(); k <= bb.max().z(); ++k) {
+        const Coord c(bb.min().x() + i, bb.min().y() + j, k);
+        const double m = static_cast<double>(acc.getValue(c));
+        if (!(m > 0.0)) continue;
+        double z0 = (k - 0.5) * h, z1 = (k + 0.5) * h, f = 1.0;
+        if (m < 1.0) {
+          // The column's top voxel (none above it, material below) holds a top face: a piece
+          // of the column as wide as the voxel below holds it (all of it under a floor, a
+          // wall's share at a wall's top edge or corner), as high as that leaves the material;
+          // a bottom voxel the same upside down. So no material rises above a top face: a
+          // corner's voxel taken as a wall's share of the voxel's full height put material
+          // above the face, which a rapid then met. Else a floor or a top (fractions changing
+          // mostly along z) is a shorter piece of the column, on the side of the material,
+          // and a wall keeps the piece at its share.
+          const double below = static_cast<double>(acc.getValue(c.offsetBy(0, 0, -1)));
+          const double above = static_cast<double>(acc.getValue(c.offsetBy(0, 0, 1)));
+          const Eigen::Vector3d n = fractionNormal(acc, c);
+          if ((below > 0.0) != (above > 0.0)) {
+            f = std::clamp(std::max(below, above), m, 1.0);
+            if (below > 0.0)
+              z1 = z0 + m / f * h;
+            else
+              z0 = z1 - m / f * h;
+          } else if (std::abs(n.z()) >= n.head<2>().norm() && n.z() != 0.0) {
+            if (n.z() > 0.0)
+              z1 = z0 + m * h;
+            else
+              z0 = z1 - m * h;
+          } else {
+            f = m;
+          }
+        }
+        if (!ray.empty() && std::abs(ray.back().z1 - z0) <= 1e-12 * h &&
+            std::abs(ray.back().f - f) <= 1e-9)
+          ray.back().z1 = z1;
+        else
+          ray.push_back({z0, z1, f});
+      }
+    }
+  });
+  return DexelStock::fromColumns((bb.min().x() - 0.5) * h, (bb.min().y() - 0.5) * h, h, nx, ny,
+                                 std::move(rays));
+}
+
+void VoxelStock::writeStockVdb(const std::string& path) const {
+  const FloatGrid& grid = *impl_->grid;
+  const double h = impl_->h;
+  const FloatGrid::Ptr surface = surfaceLevelSet(grid, h, 3, impl_->surfaceMesh()->points);
+  // The partial voxels' planes (or the stock box's faces), for a run that goes on from here.
+  openvdb::Vec3SGrid::Ptr planes[3];
+  for (int i = 0; i < 3; ++i) {
+    planes[i] = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    planes[i]->setTransform(grid.transform().copy());
+    planes[i]->setName("planes_" + std::to_string(i));
+    planes[i]->setGridClass(openvdb::GRID_UNKNOWN);
+  }
+  {
+    auto p0 = planes[0]->getAccessor();
+    auto p1 = planes[1]->getAccessor();
+    auto p2 = planes[2]->getAccessor();
+    for (auto it = grid.cbeginValueOn(); it; ++it) {
+      const double m = static_cast<double>(*it);
+      if (!it.isVoxelValue() || !(m < 1.0)) continue;
+      const Coord c = it.getCoord();
+      const auto found = impl_->planes.find(leafKey(c));
+      HalfSpace q[2], outer;
+      int made[2];
+      double held = 0.0;
+      bool united = false;
+      if (found == impl_->planes.end() ||
+          found->second.get(Leaf::coordToOffset(c), q, made, held, united, &outer) == 0) {
+        if (!impl_->box) continue;
+        boxFaces(*impl_->box, Eigen::Vector3d(c.x() * h, c.y() * h, c.z() * h), h, q);
+      }
+      p0.setValue(c, encodePlane(q[0], united));
+      p1.setValue(c, encodePlane(q[1], false));
+      if (outer.n.squaredNorm() > 0.0) p2.setValue(c, encodePlane(outer, false));
+    }
+  }
+  writeVdb(path, openvdb::GridPtrVec{impl_->grid, surface, planes[0], planes[1], planes[2]});
+}
+
+void VoxelStock::writeRemovedVdb(const std::string& path) const {
+  if (!impl_->removed) throw Error("removed.vdb needs captureRemoved(true) before the removals");
+  writeVdb(path, openvdb::GridPtrVec{impl_->removed, impl_->step, impl_->mrr});
+}
+
+}  // namespace engage
