@@ -12,7 +12,7 @@ import json, os, re, shutil, subprocess, sys
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 old, new = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 work = sys.argv[3] if len(sys.argv) > 3 else "/tmp/compare_builds"
-TIMING = re.compile(r'"(run_time[a-z_]*|steps_per_second|voxels_changed_per_second)": [-0-9.e+]+')
+TIMING = re.compile(r'"(run_time[a-z_]*|steps_per_second|voxels_changed_per_second)": ?[-0-9.e+]+')
 TIMING_TEXT = re.compile(r"[0-9.]+ s\b|\([0-9]+ steps/s\)|\[ *[0-9.]+ s\]")
 
 
@@ -23,7 +23,7 @@ def masked(path, data, out):
     if path.endswith(".vdb"):  # OpenVDB writes a new UUID into every file's header
         return data[:100].replace(UUID.search(data[:100]).group(0), b"U" * 36) + data[100:]
     data = data.replace(out.encode(), b"@OUT@")
-    if path.endswith(".json"):
+    if path.endswith(".json") or path.endswith(".html"):  # (report.html carries summary.json)
         return TIMING.sub(r'"\1": T', data.decode(errors="replace")).encode()
     if path.endswith("batch.csv"):
         lines = data.decode().splitlines()
@@ -42,8 +42,9 @@ def run(binary, args, out):
     args = [a.replace("@DATA@", os.path.join(root, "data")).replace("@SOURCE@", root)
             .replace("@OUT@", out) for a in args]
     p = subprocess.run([binary] + args, capture_output=True, cwd=os.path.dirname(out))
-    return p.returncode, TIMING_TEXT.sub("T", p.stdout.decode()).replace(out, "@OUT@"), \
-        p.stderr.decode().replace(out, "@OUT@")
+    return p.returncode, \
+        TIMING_TEXT.sub("T", p.stdout.decode(errors="replace")).replace(out, "@OUT@"), \
+        p.stderr.decode(errors="replace").replace(out, "@OUT@")
 
 
 def files(folder):
@@ -52,6 +53,8 @@ def files(folder):
         for n in names:
             full = os.path.join(base, n)
             if n == ".engage-files":  # the list of a run's files (since the staged outputs)
+                continue
+            if n.startswith(".") and n.endswith(".lock"):  # a batch job's lock: its owner's pid
                 continue
             found[os.path.relpath(full, folder)] = masked(full, open(full, "rb").read(), folder)
     return found

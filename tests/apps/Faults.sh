@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Faults injected into real runs of `engage` (registered with ctest as apps.faults):
-#   a full disk (tmpfs), a read-only folder, SIGKILL and SIGINT at random points of a run, two
+#   a full disk (tmpfs), a read-only folder, SIGKILL and SIGINT at chosen points of a run, two
 #   runs into one folder at once, an earlier run's files in the output folder, a batch on a
 #   full disk. After each: the exit status, the message, and what the folder holds: either
 #   nothing new, or one complete run (summary.json last, its steps.csv complete, no .part file).
@@ -86,20 +86,62 @@ check "earlier run: new run complete" complete "$out"
 check "earlier run: its re-fed program is gone" absent "$out/fig9_corner.ngc"
 check "earlier run: its feed plot is gone" absent "$out/feed.png"
 
-# SIGKILL and SIGINT at random points of a longer run, into a folder holding a complete run.
+# SIGKILL and SIGINT at chosen points of a longer run, into a folder holding a complete run:
+# while it simulates (after 0.2 to 1.2 s of its CPU time), when its staging folder appears,
+# while it writes steps.csv, stock.vdb or report.html (the file there, or its .part), and
+# just before it publishes (summary.json staged). Each kill hits a working process (the
+# event is waited for, not a wall-clock time); its exit status is checked: 137 for SIGKILL,
+# 130 for SIGINT (0 only where the run had already published, and then it is complete).
 out=$work/killed
 run "$out"
-RANDOM=7
-for i in 1 2 3 4 5 6 7 8; do
+cpu_seconds() {  # user + system CPU time of process $1, s
+  awk '{ printf "%.2f", ($14 + $15) / 100 }' "/proc/$1/stat" 2>/dev/null || echo 0
+}
+staged() {  # staged FILE: the run's staging folder in $out holds FILE (or FILE.part)
+  local d
+  for d in "$out"/.engage-partial-*; do
+    [ -e "$d/$1" ] || [ -e "$d/$1.part" ] && return 0
+  done
+  return 1
+}
+reached() {  # reached PID EVENT: cpu:SECONDS | staging | file:NAME
+  case $2 in
+    cpu:*) awk -v a="$(cpu_seconds "$1")" -v b="${2#cpu:}" 'BEGIN { exit !(a >= b) }' ;;
+    staging) compgen -G "$out/.engage-partial-*" >/dev/null ;;
+    file:*) staged "${2#file:}" ;;
+  esac
+}
+for event in cpu:0.2 cpu:0.6 cpu:1.2 staging file:steps.csv file:stock.vdb file:report.html \
+  file:summary.json; do
   for sig in KILL INT; do
     "$engage" simulate "$data/gcode/bench/finishing_raster.ngc" --tool ball --diameter 1mm \
       --stock box:0,0,-10,65,65,0 --voxel 0.3mm --quiet --out "$out" >/dev/null 2>&1 &
     pid=$!
-    sleep "$((RANDOM % 40 / 10)).$((RANDOM % 10))"
-    kill -s "$sig" "$pid" 2>/dev/null
-    wait "$pid" 2>/dev/null
-    check "kill -$sig run $i: the folder holds one complete run or none" nothing_or_complete "$out"
-    check "kill -$sig run $i: no half-written file" no_part_files "$out"
+    hit=0
+    for _ in $(seq 6000); do  # at most 60 s
+      kill -0 "$pid" 2>/dev/null || break
+      if reached "$pid" "$event"; then
+        kill -s "$sig" "$pid" 2>/dev/null && hit=1
+        break
+      fi
+      sleep 0.01
+    done
+    wait "$pid" 2>/dev/null  # (bash's "Killed" line is not the run's)
+    rc=$?
+    check "kill -$sig at $event: the event came while the run worked" test "$hit" -eq 1
+    if [ "$sig" = KILL ]; then
+      check "kill -$sig at $event: exit 137 (got $rc)" test "$rc" -eq 137
+    elif [ "$rc" -ne 130 ]; then
+      check "kill -$sig at $event: exit 130, or 0 for a published run (got $rc)" test "$rc" -eq 0
+      check "kill -$sig at $event: a run that ended is complete" complete "$out"
+    fi
+    if [ "$sig" = INT ]; then
+      check "kill -$sig at $event: no staging folder left" \
+        bash -c "! compgen -G '$out/.engage-partial-*' >/dev/null"
+    fi
+    check "kill -$sig at $event: the folder holds one complete run or none" \
+      nothing_or_complete "$out"
+    check "kill -$sig at $event: no half-written file" no_part_files "$out"
   done
 done
 run "$out"
