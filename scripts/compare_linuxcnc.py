@@ -189,7 +189,7 @@ def main():
                                                          "data", "gcode", "linuxcnc", "tools.tbl"),
                     help="tool table given to both interpreters (lengths in inches)")
     args = ap.parse_args()
-    failures = 0
+    failures = compared = 0
     for path in args.files:
         name = os.path.basename(path)
         try:
@@ -204,6 +204,7 @@ def main():
             failures += 1
             continue
         worst, problem = compare(ours, theirs, args.tol)
+        compared += 1
         if problem:
             print(f"FAIL {name}: {problem}")
             failures += 1
@@ -220,7 +221,10 @@ def main():
                         f.write("arc,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%s,%d\n" % (*m["end"], *m["center"], m["plane"], m["turns"]))
                     else:
                         f.write("%s,%.6f,%.6f,%.6f,,,,,\n" % (m["kind"], *m["end"]))
-    sys.exit(1 if failures else 0)
+    print(f"{compared} programs compared, {failures} failed")
+    if compared == 0:
+        print("no program was compared (is LinuxCNC's rs274 running?)")
+    sys.exit(1 if failures or compared == 0 else 0)
 
 
 if __name__ == "__main__":
