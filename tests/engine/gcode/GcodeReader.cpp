@@ -213,6 +213,19 @@ TEST_CASE("probing, spindle-synchronised motion and lathe diameter mode", "[gcod
   }
 }
 
+TEST_CASE("an arc's end off its circle: within LinuxCNC's 0.005 mm (0.0005 in), or refused",
+          "[gcode]") {
+  // About I5 J0 from the origin: to end (10, y) the radius is sqrt(25 + y^2), 0.004 mm more
+  // than 5 for y = 0.2, 0.00624 mm more for y = 0.25.
+  CHECK(errorOf("G21 G17 G90\nG2 X10 Y0.2 I5 J0 F100\n").empty());
+  CHECK_THAT(errorOf("G21 G17 G90\nG2 X10 Y0.25 I5 J0 F100\n"),
+             Contains("expected the arc's end on its circle"));
+  // In inches the same in tenths: 0.0004 in more for Y0.02 about I0.5, 0.000624 for Y0.025.
+  CHECK(errorOf("G20 G17 G90\nG2 X1 Y0.02 I0.5 J0 F10\n").empty());
+  CHECK_THAT(errorOf("G20 G17 G90\nG2 X1 Y0.025 I0.5 J0 F10\n"),
+             Contains("expected the arc's end on its circle"));
+}
+
 TEST_CASE("units, distance modes and feeds", "[gcode]") {
   SECTION("G20 converts lengths and feeds to mm where they are read") {
     const auto m = moves("G20 G90\nG1 X1 Y-0.5 F10\nM2\n");

@@ -463,3 +463,24 @@ TEST_CASE("each load limit binds on a slot and holds its load near it from below
     CHECK(checked > 50);
   }
 }
+
+TEST_CASE("a plunge never runs faster than programmed, whatever the target", "[schedule]") {
+  // A vertical line (a plunge) of 10 steps of 1 mm at 100 mm/min removing 500 mm^3/min, with
+  // a target of 2000: the MRR alone would raise its feed four times; the end face carries a
+  // plunge's load, which the model does not weigh, so it stays at 100 mm/min.
+  const Toolpath path = readProgramText("G21 G90\nG0 X0 Y0 Z0\nG1 Z-10 F100\nM2\n", "plunge.ngc");
+  REQUIRE(path.moves.size() == 2);
+  SimulationResult sim = straightRun(10, 100.0, [](int) { return 500.0; });
+  for (StepRecord& s : sim.steps) {
+    s.move = 1;
+    s.line = 3;
+  }
+  ScheduleOptions o;
+  o.targetMrr = 2000.0;
+  o.feedMax = 1000.0;
+  const Schedule sc = scheduleFeeds(path, sim, o);
+  for (std::size_t i = 0; i < sim.steps.size(); ++i) {
+    CHECK(sc.feed[i] <= 100.0 * (1 + 1e-12));
+    CHECK(sc.binding[i] == Binding::Plunge);
+  }
+}

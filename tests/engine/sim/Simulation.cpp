@@ -67,6 +67,15 @@ TEST_CASE("a slot program: steps, steady MRR = D d F, and the volume balance", "
   CHECK(r.rapidRemoved == 0.0);
 }
 
+TEST_CASE("a step is steady within 2 % of both neighbours", "[sim]") {
+  // The definition (kSteadyChange = 0.02): |neighbour / step - 1| <= 0.02 on both sides.
+  CHECK(steadyBetween(98.5, 100.0, 101.5));
+  CHECK(steadyBetween(100.0, 100.0, 100.0));
+  CHECK_FALSE(steadyBetween(97.9, 100.0, 100.0));
+  CHECK_FALSE(steadyBetween(100.0, 100.0, 102.1));
+  CHECK_FALSE(steadyBetween(100.0, 100.0, 110.0));
+}
+
 TEST_CASE("arcs are cut as arc pieces, the stock side decides concave or convex", "[sim]") {
   // A full circle of tool-centre radius 20 around a disc of stock of radius 18 (stepover 1
   // into it: convex), then around a hole of radius 22 in a block (concave).
