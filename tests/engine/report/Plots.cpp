@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -40,15 +41,47 @@ TEST_CASE("a long run's plots: the curves from one table, the top view from anot
   p.folder = dir.string();
   p.length = "mm";
   p.rate = "mm3_min";
+  p.lengthLabel = "mm";
+  p.rateLabel = "mm^3/min";
   p.data = "lines.csv";
   p.topData = "top.csv";
   const std::vector<std::string> files = writePlots(p);
   // The script, and mrr and topview as PNG and SVG.
   CHECK(files.size() == 5);
-  for (const char* f : {"plots.gp", "mrr.png", "mrr.svg", "topview.png", "topview.svg"}) {
+  for (const char* f : {"plots.gp", "mrr.png", "mrr.svg", "topview.png", "topview.svg"})
     CHECK(std::find(files.begin(), files.end(), f) != files.end());
-    CHECK(std::filesystem::file_size(dir / f) > 1000);
+  // The pictures are kPlotWidth x kPlotWidth / 2 (the PNG header's width and height,
+  // big-endian at bytes 16 and 20).
+  for (const char* f : {"mrr.png", "topview.png"}) {
+    std::ifstream png(dir / f, std::ios::binary);
+    unsigned char head[24] = {};
+    png.read(reinterpret_cast<char*>(head), sizeof head);
+    auto word = [&](int at) {
+      return (std::size_t(head[at]) << 24) | (std::size_t(head[at + 1]) << 16) |
+             (std::size_t(head[at + 2]) << 8) | std::size_t(head[at + 3]);
+    };
+    INFO(f);
+    CHECK(word(16) == kPlotWidth);
+    CHECK(word(20) == kPlotWidth / 2);
   }
+  // The MRR plot names its axes with their units and its three curves, and its MRR axis
+  // reaches the table's largest value (22: the paper form at 2 mm).
+  std::ifstream svgIn(dir / "mrr.svg");
+  const std::string svg((std::istreambuf_iterator<char>(svgIn)), std::istreambuf_iterator<char>());
+  for (const char* text : {"arc length (mm)", "MRR (mm", "analytic, exact", "analytic, paper"}) {
+    INFO(text);
+    CHECK(svg.find(text) != std::string::npos);
+  }
+  double largestTick = 0.0;
+  for (std::size_t at = svg.find("font-family=\"sans\" > "); at != std::string::npos;
+       at = svg.find("font-family=\"sans\" > ", at + 1)) {
+    const std::size_t from = at + std::string("font-family=\"sans\" > ").size();
+    char* end = nullptr;
+    const double v = std::strtod(svg.c_str() + from, &end);
+    if (end != svg.c_str() + from && *end == '<') largestTick = std::max(largestTick, v);
+  }
+  CHECK(largestTick >= 22.0);
+  CHECK(largestTick <= 30.0);
   // By hand (`gnuplot plots.gp`), both read steps.csv.
   std::ifstream in(dir / "plots.gp");
   const std::string script((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
