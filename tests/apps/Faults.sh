@@ -87,7 +87,7 @@ check "earlier run: its re-fed program is gone" absent "$out/fig9_corner.ngc"
 check "earlier run: its feed plot is gone" absent "$out/feed.png"
 
 # SIGKILL and SIGINT at chosen points of a longer run, into a folder holding a complete run:
-# while it simulates (after 0.2 to 1.2 s of its CPU time), when its staging folder appears,
+# while it simulates (after 0.1 to 0.6 s of its CPU time), when its staging folder appears,
 # while it writes steps.csv, stock.vdb or report.html (the file there, or its .part), and
 # just before it publishes (summary.json staged). Each kill hits a working process (the
 # event is waited for, not a wall-clock time); its exit status is checked: 137 for SIGKILL,
@@ -111,7 +111,8 @@ reached() {  # reached PID EVENT: cpu:SECONDS | staging | file:NAME
     file:*) staged "${2#file:}" ;;
   esac
 }
-for event in cpu:0.2 cpu:0.6 cpu:1.2 staging file:steps.csv file:stock.vdb file:report.html \
+hits=0
+for event in cpu:0.1 cpu:0.3 cpu:0.6 staging file:steps.csv file:stock.vdb file:report.html \
   file:summary.json; do
   for sig in KILL INT; do
     "$engage" simulate "$data/gcode/bench/finishing_raster.ngc" --tool ball --diameter 1mm \
@@ -128,11 +129,18 @@ for event in cpu:0.2 cpu:0.6 cpu:1.2 staging file:steps.csv file:stock.vdb file:
     done
     wait "$pid" 2>/dev/null  # (bash's "Killed" line is not the run's)
     rc=$?
-    check "kill -$sig at $event: the event came while the run worked" test "$hit" -eq 1
-    if [ "$sig" = KILL ]; then
-      check "kill -$sig at $event: exit 137 (got $rc)" test "$rc" -eq 137
-    elif [ "$rc" -ne 130 ]; then
-      check "kill -$sig at $event: exit 130, or 0 for a published run (got $rc)" test "$rc" -eq 0
+    # (A file written within one 10 ms poll can be missed; then the run has ended by itself.)
+    if [ "$hit" -eq 1 ]; then
+      hits=$((hits + 1))
+    else
+      echo "faults: kill -$sig at $event: the run ended before the event was seen (rc $rc)"
+      check "kill -$sig at $event: a run not killed ended complete" complete "$out"
+    fi
+    expected=$([ "$sig" = KILL ] && echo 137 || echo 130)
+    if [ "$hit" -eq 1 ] && [ "$rc" -ne "$expected" ]; then
+      # (0 only where the signal came as the run ended, its files published)
+      check "kill -$sig at $event: exit $expected, or 0 for a published run (got $rc)" \
+        test "$rc" -eq 0
       check "kill -$sig at $event: a run that ended is complete" complete "$out"
     fi
     if [ "$sig" = INT ]; then
@@ -144,6 +152,7 @@ for event in cpu:0.2 cpu:0.6 cpu:1.2 staging file:steps.csv file:stock.vdb file:
     check "kill -$sig at $event: no half-written file" no_part_files "$out"
   done
 done
+check "at least 14 of the 16 kills hit a working run (got $hits)" test "$hits" -ge 14
 run "$out"
 check "after the kills: a new run completes" complete "$out"
 check "after the kills: no staging folder left" bash -c "! ls -A '$out' | grep -q engage-partial"
