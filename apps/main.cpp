@@ -102,7 +102,7 @@ int main(int argc, char** argv) {
       "engage: material-engagement simulator and adaptive feedrate scheduler for CNC "
       "milling"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", versionText());
+  app.set_version_flag("--version", std::function<std::string()>(versionText));
   std::function<int()> run;
   engage::app::addAnalyzeCommand(app, run);
   engage::app::addMovesCommand(app, run);
