@@ -3,6 +3,7 @@
 #include "engine/gcode/GcodeReader.h"
 #include "engine/run/Machine.h"
 #include "engine/run/MovesTable.h"
+#include "engine/units/Quantity.h"
 
 #include <cstdio>
 #include <memory>
@@ -23,7 +24,7 @@ struct MovesOptions {
 int runMoves(const MovesOptions& o) {
   ReaderOptions reader;
   reader.toolTable = o.toolTable;
-  reader.toolTableInch = o.toolTableUnits != "mm";  // "in" or "inch"
+  reader.toolTableInch = unitSystemNamed(o.toolTableUnits) == UnitSystem::Inch;
   reader.blockDelete = o.blockDelete;
   reader.dialect = dialectOf(o.dialect);
   if (!o.machine.empty()) reader.machine = readMachine(o.machine);

@@ -512,8 +512,7 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
 }
 
 UnitSystem unitsOf(const std::string& u) {
-  if (u == "in" || u == "inch") return UnitSystem::Inch;
-  if (u == "mm") return UnitSystem::Metric;
+  if (const auto named = unitSystemNamed(u)) return *named;
   throw ParameterError("--units: expected mm or in, found '" + u + "'");
 }
 

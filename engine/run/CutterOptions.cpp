@@ -91,8 +91,7 @@ std::string describeCutter(const AptCutter& c, UnitSystem sys) {
 
 UnitSystem chooseUnitSystem(const std::string& unitsOption,
                             const std::vector<std::pair<std::string, Dimension>>& typed) {
-  if (unitsOption == "mm") return UnitSystem::Metric;
-  if (unitsOption == "in" || unitsOption == "inch") return UnitSystem::Inch;
+  if (const auto named = unitSystemNamed(unitsOption)) return *named;
   if (!unitsOption.empty())
     throw UnitError("--units: expected mm or in, found '" + unitsOption + "'");
   for (const auto& [text, dim] : typed)

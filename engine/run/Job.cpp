@@ -361,7 +361,7 @@ std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& valu
   const JobCommand command = job.command;
   ReaderOptions ro;
   ro.toolTable = text("tool-table");
-  ro.toolTableInch = text("tool-table-units") != "mm";  // "in" or "inch"
+  ro.toolTableInch = unitSystemNamed(text("tool-table-units")) == UnitSystem::Inch;
   ro.dialect = dialectOf(text("dialect"));
   ro.blockDelete = text("block-delete") == "true";
   if (!text("machine").empty()) ro.machine = readMachine(text("machine"));
@@ -564,9 +564,7 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   // Bare numbers are in the program's units; --units changes the reports only.
   const UnitSystem sys = job.path.inch ? UnitSystem::Inch : UnitSystem::Metric;
   const std::string units = text("units");
-  job.units = units == "in" || units == "inch" ? UnitSystem::Inch
-              : units == "mm"                  ? UnitSystem::Metric
-                                               : sys;
+  job.units = unitSystemNamed(units).value_or(sys);
   speak = job.units;
   ToolOptions tool{text("tool"),          text("diameter"),
                    text("corner-radius"), text("taper-angle"),

@@ -16,10 +16,8 @@ namespace engage {
 
 PocketProgram makePocketProgram(const PocketJobOptions& c) {
   const Toolpath boundary = readProgram(c.boundary);
-  const UnitSystem sys = c.units == "in" || c.units == "inch" ? UnitSystem::Inch
-                         : c.units == "mm"                    ? UnitSystem::Metric
-                         : boundary.inch                      ? UnitSystem::Inch
-                                                              : UnitSystem::Metric;
+  const UnitSystem sys =
+      unitSystemNamed(c.units).value_or(boundary.inch ? UnitSystem::Inch : UnitSystem::Metric);
   auto length = [&](const std::string& text, const char* name) {
     return parseQuantity(text, Dimension::Length, sys, name).value;
   };

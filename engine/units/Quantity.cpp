@@ -407,4 +407,10 @@ std::string_view systemName(UnitSystem sys) {
   return sys == UnitSystem::Inch ? "in" : "mm";
 }
 
+std::optional<UnitSystem> unitSystemNamed(std::string_view name) {
+  if (name == "mm") return UnitSystem::Metric;
+  if (name == "in" || name == "inch") return UnitSystem::Inch;
+  return std::nullopt;
+}
+
 }  // namespace engage

@@ -78,6 +78,9 @@ std::string formatQuantity(double internal, Dimension dim, UnitSystem sys);
 /// "mm" or "in".
 std::string_view systemName(UnitSystem sys);
 
+/// The unit system an option names: "mm", or "in" or "inch"; nothing for any other text.
+std::optional<UnitSystem> unitSystemNamed(std::string_view name);
+
 /// A library's message (which speaks internal units: "5.08 mm", "1.2 mm^3", "600 mm/min") in
 /// the report units: for an inch run every "<number> mm", "mm^2", "mm^3", "mm/min",
 /// "mm^3/min" and "mm/s^2" becomes its value in inches (six significant digits); metric
