@@ -102,9 +102,9 @@ py::dict stepColumns(const RunResult& r) {
     // Cutting physics (engine/physics), internal units. The entry and exit angles as in
     // steps.csv: from the feed direction in the direction of rotation (a slot -pi/2 to pi/2).
     const auto& l = r.sim.loads;
-    constexpr double kHalfPi = 0.5 * kPi;
-    d["entry_rad"] = column<double>(n, [&](std::size_t i) { return l[i].entry - kHalfPi; });
-    d["exit_rad"] = column<double>(n, [&](std::size_t i) { return l[i].exit - kHalfPi; });
+    d["entry_rad"] =
+        column<double>(n, [&](std::size_t i) { return fromFeedDirection(l[i].entry); });
+    d["exit_rad"] = column<double>(n, [&](std::size_t i) { return fromFeedDirection(l[i].exit); });
     d["h_max_mm"] = column<double>(n, [&](std::size_t i) { return l[i].hMax; });
     d["h_mean_mm"] = column<double>(n, [&](std::size_t i) { return l[i].hMean; });
     d["fx_N"] = column<double>(n, [&](std::size_t i) { return l[i].force.x(); });

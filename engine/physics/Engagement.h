@@ -13,6 +13,7 @@
 /// chip thickness f_z sin(phi) is negative.
 
 #include "cutters/AptCutter.h"
+#include "cutters/Numbers.h"
 #include "stock/Stock.h"
 
 #include <Eigen/Core>
@@ -21,6 +22,12 @@
 #include <vector>
 
 namespace engage {
+
+/// An immersion angle (rad, as measured here) from the feed direction instead, in the direction
+/// of rotation, as steps.csv and the Python module give it: a slot engages -pi/2 to pi/2.
+inline double fromFeedDirection(double immersion) {
+  return immersion - 0.5 * kPi;
+}
 
 /// One height slice of the edge.
 struct EdgeSlice {

@@ -9,9 +9,6 @@
 namespace engage {
 namespace {
 
-constexpr double kHalfPi = 1.5707963267948966;
-constexpr double kDegree = 57.29577951308232;
-
 const char* sideName(PathSide s) {
   return s == PathSide::Concave ? "concave" : s == PathSide::Convex ? "convex" : "straight";
 }
@@ -75,7 +72,7 @@ void writeStepsTable(std::ostream& os, const RunResult& result,
           D(s.feed, Dimension::Feed) + "," + formatNumber(s.dt) + "," +
           D(s.removed, Dimension::Volume) + "," + D(s.mrr, Dimension::VolumeRate) + "," +
           D(s.width, Dimension::Length) + "," + D(s.depth, Dimension::Length) + "," +
-          formatNumber(s.engagementRad * kDegree) + "," +
+          formatNumber(s.engagementRad * kDegPerRad) + "," +
           formatNumber(s.curvature * displayFactor(Dimension::Length, sys)) + "," +
           sideName(s.side) + "," + D(s.mrrExact, Dimension::VolumeRate) + "," +
           D(s.mrrPaper, Dimension::VolumeRate) + "," + std::to_string(s.voxelsChanged) +
@@ -89,12 +86,12 @@ void writeStepsTable(std::ostream& os, const RunResult& result,
     if (physics) {
       // Angles from the feed direction, in the direction of rotation (slot: -90 to 90).
       const StepLoad& l = result.sim.loads[i];
-      csv += "," + formatNumber((l.entry - kHalfPi) * kDegree) + "," +
-             formatNumber((l.exit - kHalfPi) * kDegree) + "," + D(l.hMax, Dimension::Length) + "," +
-             D(l.hMean, Dimension::Length) + "," + D(l.force.x(), Dimension::Force) + "," +
-             D(l.force.y(), Dimension::Force) + "," + D(l.force.z(), Dimension::Force) + "," +
-             D(l.peak, Dimension::Force) + "," + D(l.torque, Dimension::Torque) + "," +
-             D(l.power, Dimension::Power);
+      csv += "," + formatNumber(fromFeedDirection(l.entry) * kDegPerRad) + "," +
+             formatNumber(fromFeedDirection(l.exit) * kDegPerRad) + "," +
+             D(l.hMax, Dimension::Length) + "," + D(l.hMean, Dimension::Length) + "," +
+             D(l.force.x(), Dimension::Force) + "," + D(l.force.y(), Dimension::Force) + "," +
+             D(l.force.z(), Dimension::Force) + "," + D(l.peak, Dimension::Force) + "," +
+             D(l.torque, Dimension::Torque) + "," + D(l.power, Dimension::Power);
       if (schedule) {
         const ScaledLoad a = scaleLoad(l, feedScale(result, i));
         csv += "," + D(a.hMax, Dimension::Length) + "," + D(a.peak, Dimension::Force) + "," +

@@ -176,7 +176,7 @@ ordered_json physicsJson(const RunResult& result) {
       {"coefficients", coefficients},
       {"source", m.source},
       {"conditions", m.conditions},
-      {"helix_deg", std::round(o.helix * 57.29577951308232 * 1e9) / 1e9},
+      {"helix_deg", std::round(o.helix * kDegPerRad * 1e9) / 1e9},
       {"peaks", peaks(physicsPeaks(result, false))},
       {"steps_without_model",
        {{"plunge", result.sim.plungeSteps}, {"spindle_stopped", result.sim.stoppedSteps}}},
