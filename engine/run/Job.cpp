@@ -16,6 +16,17 @@
 namespace engage {
 namespace {
 
+/// "a, b and c" (or "a, b or c" with `conjunction` "or").
+std::string wordList(const std::vector<std::string>& words, const char* conjunction) {
+  std::string list;
+  for (std::size_t i = 0; i < words.size(); ++i)
+    list += (i == 0                  ? ""
+             : i + 1 == words.size() ? std::string(" ") + conjunction + " "
+                                     : ", ") +
+            words[i];
+  return list;
+}
+
 /// Check that every name is an option of `command` and that each value has the kind the table
 /// says (quantities are read later, when the unit system is known).
 void checkNames(JobCommand command, const OptionValues& values) {
@@ -27,10 +38,8 @@ void checkNames(JobCommand command, const OptionValues& values) {
       throw ParameterError("--" + name + " applies to schedule jobs only");
     if (o->kind == OptionKind::Choice && !text.empty() &&
         std::find(o->choices.begin(), o->choices.end(), text) == o->choices.end()) {
-      std::string list;
-      for (std::size_t i = 0; i < o->choices.size(); ++i)
-        list += (i == 0 ? "" : i + 1 == o->choices.size() ? " or " : ", ") + o->choices[i];
-      throw ParameterError("--" + name + ": expected " + list + ", found '" + text + "'");
+      throw ParameterError("--" + name + ": expected " + wordList(o->choices, "or") + ", found '" +
+                           text + "'");
     }
     if (o->kind == OptionKind::Flag && text != "true" && text != "false")
       throw ParameterError("--" + name + ": expected true or false, found '" + text + "'");
@@ -334,23 +343,18 @@ std::string optionText(const OptionValues& values, const std::string& name) {
 
 namespace {
 
-/// Several missing options named together (one alone gets its own message where it is read).
+/// Several missing options named together (one alone gets its own message where it is read);
+/// a CAMotics project brings its tools and workpiece.
 void refuseMissing(JobCommand command, const OptionValues& values, const std::string& program) {
+  if (isCamoticsProject(program)) return;
   auto text = [&](const char* name) { return optionText(values, name); };
-  if (!isCamoticsProject(program)) {
-    std::vector<std::string> missing;
-    if (text("tool").empty() && text("tools").empty()) missing.push_back("--tool (or --tools)");
-    if (!text("tool").empty() && text("diameter").empty()) missing.push_back("--diameter");
-    if (text("stock").empty() &&
-        !(command == JobCommand::Schedule && text("model") == std::string("analytic")))
-      missing.push_back("--stock");
-    if (missing.size() > 1) {
-      std::string list;
-      for (std::size_t i = 0; i < missing.size(); ++i)
-        list += (i == 0 ? "" : i + 1 == missing.size() ? " and " : ", ") + missing[i];
-      throw ParameterError(list + " are required");
-    }
-  }
+  std::vector<std::string> missing;
+  if (text("tool").empty() && text("tools").empty()) missing.push_back("--tool (or --tools)");
+  if (!text("tool").empty() && text("diameter").empty()) missing.push_back("--diameter");
+  if (text("stock").empty() &&
+      !(command == JobCommand::Schedule && text("model") == std::string("analytic")))
+    missing.push_back("--stock");
+  if (missing.size() > 1) throw ParameterError(wordList(missing, "and") + " are required");
 }
 
 /// The job's program read (a CAMotics project's programs one after the other) with the tool
@@ -558,7 +562,7 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   job.command = command;
   job.program = text("program");
   if (job.program.empty()) throw ParameterError("no program given");
-  if (!isCamoticsProject(job.program)) refuseMissing(command, values, job.program);
+  refuseMissing(command, values, job.program);
   std::optional<ToolLibrary> library;
   const std::optional<CamoticsProject> project = readJobProgram(job, values, library);
   // Bare numbers are in the program's units; --units changes the reports only.
