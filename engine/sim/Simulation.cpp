@@ -307,17 +307,16 @@ void addPartSweeps(const SlimParts& slimParts, int tool, const StepPath& sp, dou
   }
 }
 
-/// The collisions of step `si` (of move `move`, which removed `removed`) after its removal
-/// `rem`: a rapid that removes more than half a voxel hits material (a crash on a machine;
-/// below that it is the fraction scheme's rounding along walls it retraces), and the tool's
-/// parts `asked` (in the order of rem.partsMet) that met more.
+/// The collisions of step `si` (of move `move`) after its removal `rem`: a rapid that removes
+/// more than half a voxel hits material (a crash on a machine; below that it is the fraction
+/// scheme's rounding along walls it retraces), and the tool's parts `asked` (in the order of
+/// rem.partsMet) that met more.
 void stepCollisions(SimulationResult& out, const Move& m, std::size_t move, std::size_t si,
-                    double removed, const Removal& rem, const std::vector<const ToolPart*>& asked,
-                    double h) {
+                    const Removal& rem, const std::vector<const ToolPart*>& asked, double h) {
   const double noise = kRapidNoiseVoxels * h * h * h;
-  if (m.kind == MoveKind::Rapid && removed > noise) {
-    out.rapidRemoved += removed;
-    addCollision(out.collisions, {move, m.line, m.tool, "rapid", si, si, removed});
+  if (m.kind == MoveKind::Rapid && rem.volume > noise) {
+    out.rapidRemoved += rem.volume;
+    addCollision(out.collisions, {move, m.line, m.tool, "rapid", si, si, rem.volume});
   }
   for (std::size_t q = 0; q < asked.size(); ++q)
     if (rem.partsMet.at(q).first > noise)
@@ -466,7 +465,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       r.curvature = curvatureOf(m);
       out.removed += r.removed;
       out.voxelsChanged += r.voxelsChanged;
-      stepCollisions(out, m, p.move, si, r.removed, rem, batch[k].parts, h);
+      stepCollisions(out, m, p.move, si, rem, batch[k].parts, h);
       out.cuttingTime += r.dt;
 
       // Side of the curve the stock is on: concave when it lies on the outer side.
