@@ -370,4 +370,30 @@ double sectionMeanSquare(const HalfSpace& plane, const Eigen::Matrix3d& K) {
          (mxx * xx / 12.0 + 2.0 * mxy * xy / 24.0 + myy * yy / 12.0) / A;
 }
 
+/// The plane with outward normal n that leaves `share` of the unit cube inside: the share
+/// grows with the offset; regula falsi (Illinois) to 1e-9 of the share.
+HalfSpace planeLeaving(const Eigen::Vector3d& n, double share) {
+  double lo = -0.5 * n.lpNorm<1>(), hi = -lo;
+  double flo = -share, fhi = 1.0 - share;
+  double a = 0.0;
+  int side = 0;
+  for (int i = 0; i < 60; ++i) {
+    a = (lo * fhi - hi * flo) / (fhi - flo);
+    const double f = cubeFraction(HalfSpace{n, a}) - share;
+    if (std::abs(f) < 1e-9) break;
+    if (f < 0.0) {
+      lo = a;
+      flo = f;
+      if (side == -1) fhi /= 2.0;
+      side = -1;
+    } else {
+      hi = a;
+      fhi = f;
+      if (side == 1) flo /= 2.0;
+      side = 1;
+    }
+  }
+  return HalfSpace{n, a};
+}
+
 }  // namespace engage

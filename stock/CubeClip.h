@@ -27,6 +27,10 @@ inline double cubeFraction(const HalfSpace& p) {
   return cubeFraction(&p, 1);
 }
 
+/// The plane with outward normal n that leaves `share` of the unit cube inside: the share
+/// grows with the offset; regula falsi (Illinois) to 1e-9 of the share.
+HalfSpace planeLeaving(const Eigen::Vector3d& n, double share);
+
 /// The mean over the section of the plane {u : n . u = a} (n of unit length) with the unit
 /// cube of (u - f)^T K (u - f), f = a n the foot of the cube's centre; 0 where the plane
 /// misses the cube. (With K a surface's curvature, half of it is the mean distance from the

@@ -21,8 +21,6 @@ namespace {
 
 /// Precision of a ray's entry into and exit from a swept solid, mm.
 constexpr double kZTolerance = 1e-4;
-/// Angular bins of the engagement arc.
-constexpr int kAngleBins = 256;
 /// Steps whose boxes hold at least this many columns (together) have their tiles removed side
 /// by side where there are cores (fewer: one after another, a thread's start costing more than
 /// it saves); a column of a step that keeps its height (a closed form) counts less.
@@ -36,6 +34,47 @@ using Intervals = std::vector<Interval>;
 /// Shares within this of each other are the same: one cover computed twice by different sums
 /// (a retract over what its step's end cut) would otherwise take 1e-18 mm^3 from nothing.
 constexpr double kSameShare = 1e-12;
+/// A column share within this of 0 or 1 is all air or all material for inMaterial.
+constexpr double kShareNoise = 1e-9;
+/// A line across a column that leaves its 3 x 3 neighbours their shares to this (sum of
+/// squares) holds them all: no other is tried; to kGoodLine (a hundredth of a share in
+/// each), no one-sided one.
+constexpr double kExactLine = 1e-12, kGoodLine = 1e-3;
+
+/// The share of the unit square [-1/2, 1/2]^2 on the side m . u <= offset of a line (m of
+/// unit length), in closed form (Scardovelli & Zaleski 2000).
+double squareShare(const Eigen::Vector2d& m, double offset) {
+  const double m1 = std::min(std::abs(m.x()), std::abs(m.y()));
+  const double m2 = std::max(std::abs(m.x()), std::abs(m.y()));
+  const double alpha = offset + 0.5 * (m1 + m2);  // from the square's lowest corner
+  if (alpha <= 0.0) return 0.0;
+  if (alpha >= m1 + m2) return 1.0;
+  if (m1 < 1e-12) return std::clamp(alpha / m2, 0.0, 1.0);
+  if (alpha < m1) return alpha * alpha / (2.0 * m1 * m2);
+  if (alpha <= m2) return (2.0 * alpha - m1) / (2.0 * m2);
+  const double rest = m1 + m2 - alpha;
+  return 1.0 - rest * rest / (2.0 * m1 * m2);
+}
+
+/// The offset of the line with normal m (unit length) that leaves `share` of the unit square
+/// on the side m . u <= offset: squareShare's inverse.
+double squareOffset(const Eigen::Vector2d& m, double share) {
+  const double m1 = std::min(std::abs(m.x()), std::abs(m.y()));
+  const double m2 = std::max(std::abs(m.x()), std::abs(m.y()));
+  double alpha;
+  if (m1 < 1e-12) {
+    alpha = m2 * share;
+  } else {
+    const double corner = m1 / (2.0 * m2);  // the share cut off below alpha = m1
+    if (share <= corner)
+      alpha = std::sqrt(2.0 * m1 * m2 * share);
+    else if (share <= 1.0 - corner)
+      alpha = m2 * share + 0.5 * m1;
+    else
+      alpha = m1 + m2 - std::sqrt(2.0 * m1 * m2 * (1.0 - share));
+  }
+  return alpha - 0.5 * (m1 + m2);
+}
 
 /// The cell of a column's losses at voxel height k, the column grown to hold it (by at least 8
 /// cells, so that a cut going deeper step by step does not copy the column every step).
@@ -317,25 +356,183 @@ double DexelStock::materialInside(const Sweep& sweep, double top) const {
   return sum * h_ * h_;
 }
 
-std::vector<double> DexelStock::materialAt(const std::vector<Eigen::Vector3d>& points) const {
-  std::vector<double> out;
-  out.reserve(points.size());
-  // The share of ray (i, j) at height z: its interval's share there, times the column's.
-  auto at = [&](int i, int j, double z) {
-    if (i < 0 || j < 0 || i >= nx_ || j >= ny_) return 0.0;
-    for (const Interval& piece : rays_[index(i, j)])
-      if (z >= piece.z0 && z < piece.z1) return piece.f * weight_[index(i, j)];
-    return 0.0;
-  };
-  for (const Eigen::Vector3d& p : points) {
-    // Ray (i, j) stands at x0 + (i + 1/2) h.
-    const double gx = (p.x() - x0_) / h_ - 0.5, gy = (p.y() - y0_) / h_ - 0.5;
-    const int i = static_cast<int>(std::floor(gx)), j = static_cast<int>(std::floor(gy));
-    const double tx = gx - i, ty = gy - j;
-    out.push_back((1 - tx) * (1 - ty) * at(i, j, p.z()) + tx * (1 - ty) * at(i + 1, j, p.z()) +
-                  (1 - tx) * ty * at(i, j + 1, p.z()) + tx * ty * at(i + 1, j + 1, p.z()));
+/// A dexel stock's MaterialReader. A column crossed by a surface holds it as a line that
+/// leaves the column's share (ELVIRA: of the lines whose slopes the 3 x 3 neighbours' shares
+/// summed across them give, by central, backward and forward differences along either axis,
+/// the one that best leaves the neighbours their shares). Exact for a straight surface across
+/// the nine columns, and for one across six of them where the other three hold another (a cut
+/// beside a wall). A column has two shares, each with its own surface: its own (field 0: the
+/// stock's faces, the same at every height) and its interval's (field 1: the cuts). Lines are
+/// kept for the heights where the nine shares stay the same: one measurement reads the same
+/// columns again and again, slice above slice.
+class DexelReader final : public MaterialReader {
+ public:
+  DexelReader(const DexelStock& stock, std::size_t afterStep) : s_(stock), after_(afterStep) {}
+
+  const std::vector<std::uint8_t>& read(const std::vector<Eigen::Vector3d>& points) override {
+    out_.clear();
+    for (const Eigen::Vector3d& p : points) {
+      // Column (i, j) spans [x0 + i h, x0 + (i + 1) h] in x.
+      const double gx = (p.x() - s_.x0_) / s_.h_, gy = (p.y() - s_.y0_) / s_.h_;
+      const int i = static_cast<int>(std::floor(gx)), j = static_cast<int>(std::floor(gy));
+      out_.push_back(inside(0, i, j, p.z(), gx, gy) && inside(1, i, j, p.z(), gx, gy));
+    }
+    return out_;
   }
-  return out;
+
+ private:
+  struct Line {
+    double lo, hi;      // the heights it holds for
+    Eigen::Vector2d m;  // outward normal (zero: the share alone decides)
+    double offset;
+    std::uint32_t next;  // the column's next line in pool_ (kNone: the last)
+  };
+  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+
+  /// The share of column (i, j) in `field` at height z; narrows [lo, hi) to the heights about z
+  /// where it stays the same.
+  double share(int field, int i, int j, double z, double& lo, double& hi) const {
+    if (i < 0 || j < 0 || i >= s_.nx_ || j >= s_.ny_) return 0.0;
+    if (field == 0) return s_.weight_[s_.index(i, j)];
+    double below = -std::numeric_limits<double>::infinity();
+    const auto [begin, end] = ray(s_.index(i, j));
+    for (const DexelStock::Interval* it = begin; it != end; ++it) {
+      const DexelStock::Interval& piece = *it;
+      if (z < piece.z0) {
+        lo = std::max(lo, below);
+        hi = std::min(hi, piece.z0);
+        return 0.0;
+      }
+      if (z < piece.z1) {
+        lo = std::max(lo, piece.z0);
+        hi = std::min(hi, piece.z1);
+        return piece.f;
+      }
+      below = piece.z1;
+    }
+    lo = std::max(lo, below);
+    return 0.0;
+  }
+
+  bool inside(int field, int i, int j, double z, double gx, double gy) {
+    double lo = 0.0, hi = 0.0;
+    const double at = share(field, i, j, z, lo, hi);
+    if (at >= 1.0 - kShareNoise || at <= kShareNoise) return at > 0.5;
+    const Line& l = line(field, i, j, z, at);
+    if (l.m.squaredNorm() == 0.0) return at > 0.5;
+    return l.m.x() * (gx - i - 0.5) + l.m.y() * (gy - j - 0.5) <= l.offset;
+  }
+
+  /// Ray k's intervals after step after_ of the last batch: what it held before the first
+  /// later step changed it, else what it holds.
+  std::pair<const DexelStock::Interval*, const DexelStock::Interval*> ray(std::size_t k) const {
+    if (after_ != Stock::kLatest) {
+      const auto found = s_.beforeOf_.find(k);
+      if (found != s_.beforeOf_.end())
+        for (std::size_t q = found->second; q < s_.before_.size() && s_.before_[q].ray == k; ++q)
+          if (s_.before_[q].step > after_) {
+            const DexelStock::Interval* a = s_.beforeIntervals_.data() + s_.before_[q].from;
+            return {a, a + s_.before_[q].count};
+          }
+    }
+    const std::vector<DexelStock::Interval>& now = s_.rays_[k];
+    return {now.data(), now.data() + now.size()};
+  }
+
+  const Line& line(int field, int i, int j, double z, double at) {
+    const std::uint64_t key =
+        static_cast<std::uint64_t>(s_.index(i, j)) * 2u + static_cast<std::uint64_t>(field);
+    std::uint32_t& head = slot(key);
+    for (std::uint32_t k = head; k != kNone; k = pool_[k].next)
+      if (z >= pool_[k].lo && z < pool_[k].hi) return pool_[k];
+    Line l{-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+           Eigen::Vector2d::Zero(), 0.0, head};
+    double n[3][3];
+    for (int a = -1; a <= 1; ++a)
+      for (int b = -1; b <= 1; ++b)
+        n[a + 1][b + 1] = share(field, i + a, j + b, z, l.lo, l.hi);
+    const double gxs = (n[2][0] + 2.0 * n[2][1] + n[2][2]) - (n[0][0] + 2.0 * n[0][1] + n[0][2]);
+    const double gys = (n[0][2] + 2.0 * n[1][2] + n[2][2]) - (n[0][0] + 2.0 * n[1][0] + n[2][0]);
+    double bestError = std::numeric_limits<double>::infinity();
+    auto consider = [&](const Eigen::Vector2d& normal) {
+      if (!(normal.norm() > 0.0)) return;
+      const Eigen::Vector2d m = normal.normalized();
+      const double offset = squareOffset(m, at);
+      double error = 0.0;
+      for (int a = -1; a <= 1; ++a)
+        for (int b = -1; b <= 1; ++b) {
+          const double d = squareShare(m, offset - m.x() * a - m.y() * b) - n[a + 1][b + 1];
+          error += d * d;
+        }
+      if (error < bestError) {
+        bestError = error;
+        l.m = m;
+        l.offset = offset;
+      }
+    };
+    const double rows[3] = {n[0][0] + n[1][0] + n[2][0], n[0][1] + n[1][1] + n[2][1],
+                            n[0][2] + n[1][2] + n[2][2]};  // material along x, per row
+    const double cols[3] = {n[0][0] + n[0][1] + n[0][2], n[1][0] + n[1][1] + n[1][2],
+                            n[2][0] + n[2][1] + n[2][2]};  // along y, per column
+    const bool alongX = std::abs(gxs) >= std::abs(gys);
+    // The central differences first, along the axis the material grows along most, then the
+    // other: a straight surface across the nine columns the first reproduces exactly, and a
+    // gently curved one nearly (kGoodLine); only where neither does (another surface among
+    // the nine) are the one-sided differences tried.
+    auto candidates = [&](int from, int to) {
+      for (int pass = 0; pass < 2 && !(bestError < kExactLine); ++pass) {
+        const bool x = (pass == 0) == alongX;
+        const double* sums = x ? rows : cols;
+        const double g = x ? gxs : gys;
+        if (g == 0.0) continue;
+        const double sign = g > 0.0 ? -1.0 : 1.0;
+        const double slopes[3] = {0.5 * (sums[2] - sums[0]), sums[1] - sums[0], sums[2] - sums[1]};
+        for (int c = from; c < to && !(bestError < kExactLine); ++c)
+          consider(x ? Eigen::Vector2d(sign, -slopes[c]) : Eigen::Vector2d(-slopes[c], sign));
+      }
+    };
+    candidates(0, 1);
+    if (!(bestError < kGoodLine)) candidates(1, 3);
+    pool_.push_back(l);
+    head = static_cast<std::uint32_t>(pool_.size() - 1);
+    return pool_.back();
+  }
+
+  /// The head of key's list in the open-addressed table (kNone: a new key), the table grown
+  /// to keep it at most half full.
+  std::uint32_t& slot(std::uint64_t key) {
+    if (2 * (used_ + 1) > keys_.size()) {
+      std::vector<std::uint64_t> keys = std::move(keys_);
+      std::vector<std::uint32_t> heads = std::move(heads_);
+      keys_.assign(std::max<std::size_t>(256, 2 * keys.size()), kEmpty);
+      heads_.assign(keys_.size(), kNone);
+      used_ = 0;
+      for (std::size_t q = 0; q < keys.size(); ++q)
+        if (keys[q] != kEmpty) slot(keys[q]) = heads[q];
+    }
+    const std::size_t mask = keys_.size() - 1;
+    for (std::size_t q = (key * 0x9E3779B97F4A7C15ull) >> 20 & mask;; q = (q + 1) & mask) {
+      if (keys_[q] == key) return heads_[q];
+      if (keys_[q] == kEmpty) {
+        keys_[q] = key;
+        ++used_;
+        return heads_[q];
+      }
+    }
+  }
+
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  const DexelStock& s_;
+  std::size_t after_;
+  std::vector<Line> pool_;
+  std::vector<std::uint64_t> keys_;   // per column and field: an open-addressed table
+  std::vector<std::uint32_t> heads_;  // of the heads of their lists in pool_
+  std::size_t used_ = 0;
+  std::vector<std::uint8_t> out_;
+};
+
+std::unique_ptr<MaterialReader> DexelStock::materialReader(std::size_t afterStep) const {
+  return std::make_unique<DexelReader>(*this, afterStep);
 }
 
 Removal DexelStock::remove(const Sweep& sweep, int step, double dtSeconds) {
@@ -407,11 +604,10 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
   // tile by tile in the tiles' order: the same sums whatever the thread count and however
   // the steps come in batches.
   struct Cut {
-    Eigen::Vector2d xy;
     double z0, z1;
   };
   struct Part {
-    double volume = 0.0, lateral = 0.0, sMin = 1e300, sMax = -1e300;
+    double volume = 0.0, lateral = 0.0;
     long changed = 0, visited = 0;
     std::size_t cutsEnd = 0;  // its cuts: the tile's from the last part's end to this
     std::vector<std::pair<double, double>> met;  // the step's tool parts: slim, full (mm)
@@ -427,6 +623,8 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
     std::vector<Part> parts;         // one for each of steps
     std::vector<Cut> cuts;           // the parts' cuts, one part after another
     std::vector<Started> started;    // in the order started
+    std::vector<Before> before;      // the rays' intervals before each step changed them
+    std::vector<Interval> beforeIntervals;
   };
   const int tilesX = (nx_ + kTile - 1) / kTile;
   std::vector<std::pair<int, std::size_t>> reach;  // (tile, step), by tile then step
@@ -510,18 +708,29 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
       if (inside) solid.push_back({entry, hi, 1.0});
     }
     double removed = 0.0;
+    bool logged = false;
     LostColumn* column = nullptr;  // this ray's losses, found or started on its first loss
     for (const Interval& sx : solid) {
-      // What of the ray in [z0, z1] loses material; remember where, for the engagement.
+      // What of the ray in [z0, z1] loses material; remember where, for the axial depth.
       for (const Interval& x : ray)
         if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f + kSameShare)
-          tile.cuts.push_back({q, std::max(x.z0, sx.z0), std::min(x.z1, sx.z1)});
+          tile.cuts.push_back({std::max(x.z0, sx.z0), std::min(x.z1, sx.z1)});
       // The capture: what each of the ray's intervals the piece cuts loses, as cut() takes
       // it, summed into the column's cells of voxel height, with the first step to take some
       // (so that removed.vdb holds the removed volume, and in its place, exact to float
       // rounding). A log at a span's mean share would put a wall column's rest and the
       // material below it at one share, more than a voxel's material in some voxels.
       const double keep = 1.0 - sx.f;
+      // The ray as it was before this step, for readers of the material after an earlier
+      // step of the batch (before its first change by this step).
+      if (!logged)
+        for (const Interval& x : ray)
+          if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > keep + kSameShare) {
+            tile.before.push_back({index(i, j), s, tile.beforeIntervals.size(), ray.size()});
+            tile.beforeIntervals.insert(tile.beforeIntervals.end(), ray.begin(), ray.end());
+            logged = true;
+            break;
+          }
       if (capture_) {
         for (const Interval& x : ray)
           if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > keep + kSameShare) {
@@ -556,8 +765,6 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
     ++part.changed;
     const double side = (q - path.end.head<2>()).dot(g.n);
     part.lateral += volume * side;
-    part.sMin = std::min(part.sMin, side - 0.5 * h_);
-    part.sMax = std::max(part.sMax, side + 0.5 * h_);
   };
   // A tile: the steps that reach it in order, each over its columns row by row. Its loss
   // columns are started in its own list (lost_ must not grow, and move, under another
@@ -601,14 +808,31 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
       runTile(tile);
   }
 
+  // The rays' earlier intervals, by ray and step (a tile logs its rays in step order; tiles
+  // hold different rays).
+  before_.clear();
+  beforeIntervals_.clear();
+  for (Tile& tile : tiles) {
+    for (Before b : tile.before) {
+      b.from += beforeIntervals_.size();
+      before_.push_back(b);
+    }
+    beforeIntervals_.insert(beforeIntervals_.end(), tile.beforeIntervals.begin(),
+                            tile.beforeIntervals.end());
+  }
+  std::stable_sort(before_.begin(), before_.end(),
+                   [](const Before& a, const Before& b) { return a.ray < b.ray; });
+  beforeOf_.clear();
+  for (std::size_t q = 0; q < before_.size(); ++q)
+    beforeOf_.try_emplace(before_[q].ray, q);
+
   // Each step's sums, tile by tile; the loss columns its tiles started join lost_.
   std::vector<Removal> outs(steps.size());
   std::vector<std::size_t> nextPart(tiles.size(), 0), nextStarted(tiles.size(), 0);
   std::vector<Cut> cuts;
   for (std::size_t s = 0; s < steps.size(); ++s) {
-    const Plan& g = plans[s];
     Removal& out = outs[s];
-    double zMin = 1e300, zMax = -1e300, sMin = 1e300, sMax = -1e300;
+    double zMin = 1e300, zMax = -1e300;
     cuts.clear();
     out.partsMet.assign(steps[s].parts.size(), {0.0, 0.0});
     for (std::size_t t = 0; t < tiles.size(); ++t) {
@@ -620,8 +844,6 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
         out.lateral += part.lateral;
         out.voxelsChanged += part.changed;
         out.voxelsVisited += part.visited;
-        sMin = std::min(sMin, part.sMin);
-        sMax = std::max(sMax, part.sMax);
         cuts.insert(cuts.end(), tile.cuts.begin() + static_cast<std::ptrdiff_t>(from),
                     tile.cuts.begin() + static_cast<std::ptrdiff_t>(part.cutsEnd));
         for (std::size_t k = 0; k < part.met.size(); ++k) {
@@ -651,23 +873,6 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
       out.lateral /= out.volume;
       out.axialDepth = std::min(zMax - std::max(zMin, 0.0), cutter.height());
       out.top = std::min(zMax, cutter.height());
-      out.radialWidth = sMax - sMin;
-      // Engagement angle: the arc of the periphery, at mid depth, where this step removed
-      // material (rays within a column of the cutter's edge there).
-      const double zMid = std::clamp(0.5 * out.axialDepth, 0.0, cutter.height());
-      const double edge = cutter.radiusAt(zMid);
-      std::vector<bool> bin(kAngleBins, false);
-      for (const Cut& c : cuts) {
-        if (c.z0 > end.z() + zMid || c.z1 < end.z() + zMid) continue;
-        const Eigen::Vector2d rel = c.xy - end.head<2>();
-        if (std::abs(rel.norm() - edge) > h_) continue;
-        double theta = std::atan2(rel.dot(g.n), rel.dot(g.u));
-        if (theta < 0) theta += 2.0 * kPi;
-        bin[static_cast<std::size_t>(
-            std::min(kAngleBins - 1.0, theta / (2.0 * kPi) * kAngleBins))] = true;
-      }
-      out.engagementRad =
-          2.0 * kPi * static_cast<double>(std::count(bin.begin(), bin.end(), true)) / kAngleBins;
     }
     const int step = steps[s].step;
     if (capture_ && step >= 0) {

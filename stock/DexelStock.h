@@ -31,6 +31,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -60,7 +61,13 @@ class DexelStock : public Stock {
   /// remove() one step after another, to the bit, whatever the thread count.
   std::vector<Removal> removeSteps(const std::vector<StepCut>& steps) override;
   double materialInside(const Sweep& sweep, double top) const override;
-  std::vector<double> materialAt(const std::vector<Eigen::Vector3d>& points) const override;
+  /// The material as it was after step `afterStep` of the last removeSteps call, from what
+  /// the rays held before each later step of it changed them.
+  std::unique_ptr<MaterialReader> materialReader(std::size_t afterStep = kLatest) const override;
+  bool readsWithinBatch() const override { return true; }
+  /// A column's line comes from its 3 x 3 neighbours: a surface within one and a half diagonals
+  /// (2.12 spacings) tilts it.
+  double readingReach() const override { return 2.5; }
 
   /// Rays in x and y, their spacing, and the grid's corner (mm).
   int raysX() const { return nx_; }
@@ -151,6 +158,7 @@ class DexelStock : public Stock {
       }
     }
   }
+  friend class DexelReader;
   std::size_t index(int i, int j) const {
     return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) +
            static_cast<std::size_t>(i);
@@ -165,6 +173,15 @@ class DexelStock : public Stock {
   static constexpr std::uint32_t kNoColumn = 0xFFFFFFFFu;
   std::vector<std::uint32_t> lostIndex_;
   std::vector<LostColumn> lost_;
+  /// What the last removeSteps call changed: per ray (by index) and step (in that call), in
+  /// that order, the ray's intervals before the step changed it.
+  struct Before {
+    std::size_t ray, step;
+    std::size_t from, count;  ///< its intervals in beforeIntervals_
+  };
+  std::vector<Before> before_;
+  std::vector<Interval> beforeIntervals_;
+  std::unordered_map<std::size_t, std::size_t> beforeOf_;  ///< a ray's first in before_
   std::vector<double> stepMrr_;
 };
 

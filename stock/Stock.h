@@ -11,6 +11,8 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <cstdint>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -18,11 +20,9 @@ namespace engage {
 
 /// What one removal did: measured volume and engagement, and the work it cost.
 struct Removal {
-  double volume = 0.0;         ///< removed volume, mm^3
-  double axialDepth = 0.0;     ///< extent of the removed material along the tool axis, mm
-  double radialWidth = 0.0;    ///< extent across the feed direction (at the step end), mm
-  double top = 0.0;            ///< height of the removed material's top above the tip, mm
-  double engagementRad = 0.0;  ///< angle of the cutter's periphery in contact, rad
+  double volume = 0.0;      ///< removed volume, mm^3
+  double axialDepth = 0.0;  ///< extent of the removed material along the tool axis, mm
+  double top = 0.0;         ///< height of the removed material's top above the tip, mm
   /// Volume-weighted mean offset of the removed material across the feed direction, mm:
   /// + on the left of the direction of travel (seen from +Z). Tells which side the stock is.
   double lateral = 0.0;
@@ -54,6 +54,21 @@ struct StepCut {
   std::vector<PartSweep> parts;  ///< what is asked after the step's removal
 };
 
+/// Whether points lie in material, read to a fraction of a cell: a cell crossed by the
+/// material's surface holds it as planes that leave the cell's share of material (the voxel
+/// stock's stored planes; a dexel column's share as a line across it, its slope from the
+/// neighbours' shares, and its intervals exact along z). Exact for plane faces and the cuts'
+/// walls away from corners; within a cell where two faces meet, to about a tenth of a cell.
+/// Read just outside the cutter after a removal, it tells which part of the edge is in
+/// contact (engine/physics/Engagement.h). A reader keeps what it worked out about the cells it
+/// read for the points it is asked next.
+class MaterialReader {
+ public:
+  virtual ~MaterialReader() = default;
+  /// 1 where the point lies in material, 0 where not; valid until the next call.
+  virtual const std::vector<std::uint8_t>& read(const std::vector<Eigen::Vector3d>& points) = 0;
+};
+
 /// A stock model.
 class Stock {
  public:
@@ -71,11 +86,19 @@ class Stock {
   /// resolution long, whose centres lie inside. Accurate to about a layer of cells on the
   /// contact's surface.
   virtual double materialInside(const Sweep& sweep, double top) const = 0;
-  /// The material's share at each point, 0 to 1, interpolated between cells (trilinearly
-  /// between voxel centres; bilinearly between rays, each in or out at the point's height):
-  /// about 0.5 on the material's surface. Read after a removal, just outside the cutter, it
-  /// tells which part of the edge is in contact (engine/physics/Engagement.h).
-  virtual std::vector<double> materialAt(const std::vector<Eigen::Vector3d>& points) const = 0;
+  /// Reads whether points lie in material (MaterialReader), for as long as the stock does not
+  /// change: one reader for one measurement of a step's contact. `afterStep`: the material as
+  /// it was after that step (an index into the last removeSteps call) where
+  /// readsWithinBatch(); kLatest, as it is now.
+  static constexpr std::size_t kLatest = static_cast<std::size_t>(-1);
+  virtual std::unique_ptr<MaterialReader> materialReader(std::size_t afterStep = kLatest) const = 0;
+  /// Whether materialReader can read the material as it was after each step of the last
+  /// removeSteps call (else only as it is now: a caller that reads the stock after each step
+  /// then removes them one at a time).
+  virtual bool readsWithinBatch() const { return false; }
+  /// How far from a point (in cells) a second surface may change a MaterialReader's reading of
+  /// the first: beyond it, a wall is read exactly whatever else was cut nearby.
+  virtual double readingReach() const = 0;
   /// Remove one step's swept solid; `step` and `dtSeconds` label it (for capture grids).
   virtual Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) = 0;
   /// Remove consecutive steps in their order, each step's parts asked after its removal,

@@ -51,32 +51,6 @@ void boxFaces(const Box3& b, const Eigen::Vector3d& p, double h, HalfSpace out[2
   }
 }
 
-/// The plane with outward normal n that leaves `share` of the unit cube inside: the share
-/// grows with the offset; regula falsi (Illinois) to 1e-9 of the share.
-HalfSpace planeLeaving(const Eigen::Vector3d& n, double share) {
-  double lo = -0.5 * n.lpNorm<1>(), hi = -lo;
-  double flo = -share, fhi = 1.0 - share;
-  double a = 0.0;
-  int side = 0;
-  for (int i = 0; i < 60; ++i) {
-    a = (lo * fhi - hi * flo) / (fhi - flo);
-    const double f = cubeFraction(HalfSpace{n, a}) - share;
-    if (std::abs(f) < 1e-9) break;
-    if (f < 0.0) {
-      lo = a;
-      flo = f;
-      if (side == -1) fhi /= 2.0;
-      side = -1;
-    } else {
-      hi = a;
-      fhi = f;
-      if (side == 1) flo /= 2.0;
-      side = 1;
-    }
-  }
-  return HalfSpace{n, a};
-}
-
 /// Share of the cube inside the material of planes q (inside both, or with `united` inside
 /// either, and inside `outer` if given) and inside all of `extra`; with `centroid`, that
 /// part's centroid.

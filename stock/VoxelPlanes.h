@@ -54,7 +54,7 @@ constexpr double kPairNear = 0.01;
 /// Share of a voxel a pair of planes may lose of the material a cut left and still count as
 /// holding it all (a hundredth of kPairNear: 3e-6 mm^3 in a 0.3 mm voxel).
 constexpr double kLostNoise = 1e-4;
-/// Share of a voxel a step must take for the voxel to count in the step's width and depth.
+/// Share of a voxel a step must take for the voxel to count in the step's axial depth.
 constexpr double kEngagedShare = 0.01;
 
 /// The planes of the partial voxels of one leaf: slot[offset] is 0 for none, else one more
@@ -133,10 +133,6 @@ struct StoredMaterial {
 /// The faces of box b that cross the voxel at p (size h) as its planes: the two that cut the
 /// most (all but edge and corner voxels have one or two; a missing one keeps all).
 void boxFaces(const Box3& b, const Eigen::Vector3d& p, double h, HalfSpace out[2]);
-
-/// The plane with outward normal n that leaves `share` of the unit cube inside: the share
-/// grows with the offset; regula falsi (Illinois) to 1e-9 of the share.
-HalfSpace planeLeaving(const Eigen::Vector3d& n, double share);
 
 /// Share of the cube inside the material of planes q (inside both, or with `united` inside
 /// either, and inside `outer` if given) and inside all of `extra`; with `centroid`, that

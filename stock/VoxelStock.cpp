@@ -103,9 +103,6 @@ void checkMemory(const Box3& box, double h) {
 
 namespace {
 
-/// Angular bins for the engagement angle (5 degrees each).
-constexpr int kAngleBins = 72;
-
 /// openvdb::tools::BoxSampler::sample(acc, q), trilinear in index space with the same
 /// arithmetic, reading the eight values from one leaf's buffer where they lie in one leaf
 /// (about 2 samples in 3) instead of the accessor's eight lookups per sample (576 samples per
@@ -137,7 +134,6 @@ struct LeafResult {
   double volume = 0.0;
   double lateralMoment = 0.0;
   double zMin = 1e300, zMax = -1e300;
-  double sMin = 1e300, sMax = -1e300;
   long changed = 0;
   long visited = 0;
   std::vector<std::pair<Coord, float>> lost;  ///< per changed voxel, when capturing
@@ -334,15 +330,54 @@ double VoxelStock::materialInside(const Sweep& sweep, double top) const {
   return sum * h * h * h;
 }
 
-std::vector<double> VoxelStock::materialAt(const std::vector<Eigen::Vector3d>& points) const {
-  const Impl& s = *impl_;
-  auto acc = s.grid->getAccessor();
-  std::vector<double> out;
-  out.reserve(points.size());
-  for (const Eigen::Vector3d& p : points)
-    out.push_back(static_cast<double>(
-        sampleTrilinear(acc, openvdb::Vec3d(p.x() / s.h, p.y() / s.h, p.z() / s.h))));
-  return out;
+/// A voxel stock's MaterialReader: a voxel all material or none says so; a partial one, the
+/// planes that bound its material where they hold its fraction (else, planes never kept, as
+/// in a stock read from dexels, the fractions' 0.5 level).
+class VoxelReader final : public MaterialReader {
+ public:
+  explicit VoxelReader(const VoxelStock::Impl& s) : s_(s), acc_(s.grid->getAccessor()) {}
+
+  const std::vector<std::uint8_t>& read(const std::vector<Eigen::Vector3d>& points) override {
+    out_.clear();
+    for (const Eigen::Vector3d& p : points)
+      out_.push_back(inside(p));
+    return out_;
+  }
+
+ private:
+  bool inside(const Eigen::Vector3d& p) {
+    // Outside the box a stock was made from there is none (a voxel on its shell holding a
+    // wall and a cut as its two planes no longer holds the box's face).
+    if (s_.box &&
+        ((p.array() < s_.box->min.array()).any() || (p.array() > s_.box->max.array()).any()))
+      return false;
+    const Coord c = s_.index(p);
+    const double f = static_cast<double>(acc_.getValue(c));
+    if (f >= 1.0 - kNoise || f <= kNoise) return f > 0.5;
+    const Eigen::Vector3d centre(c.x() * s_.h, c.y() * s_.h, c.z() * s_.h);
+    const auto leaf = s_.planes.find(leafKey(c));
+    static const LeafPlanes none;
+    StoredMaterial m;
+    if (storedMaterial(leaf == s_.planes.end() ? none : leaf->second, Leaf::coordToOffset(c), f,
+                       s_.box ? &*s_.box : nullptr, centre, s_.h, m)) {
+      if (std::isnan(m.held)) m.held = materialShare(m.q, m.united, nullptr, 0, nullptr, &m.outer);
+      if (m.held > 0.0 && std::abs(m.held - f) <= kPlanesAgree) {
+        const Eigen::Vector3d u = (p - centre) / s_.h;
+        auto in = [&](const HalfSpace& q) { return q.n.dot(u) <= q.a; };
+        return m.united ? (in(m.q[0]) || in(m.q[1])) && in(m.outer)
+                        : in(m.q[0]) && in(m.q[1]) && in(m.outer);
+      }
+    }
+    return sampleTrilinear(acc_, openvdb::Vec3d(p.x() / s_.h, p.y() / s_.h, p.z() / s_.h)) > 0.5f;
+  }
+
+  const VoxelStock::Impl& s_;
+  FloatGrid::Accessor acc_;
+  std::vector<std::uint8_t> out_;
+};
+
+std::unique_ptr<MaterialReader> VoxelStock::materialReader(std::size_t) const {
+  return std::make_unique<VoxelReader>(*impl_);
 }
 
 double VoxelStock::fraction(int i, int j, int k) const {
@@ -455,11 +490,11 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
             planes.release(offset);
           }
           if (s.capture) r.lost.emplace_back(ijk, before - std::max(after, 0.0f));
-          // Engagement geometry relative to the tip at the step's end. A voxel stands for
+          // The removed material's height relative to the tip at the step's end. A voxel stands for
           // material up to (lost fraction - 1/2) h beyond its centre, which places a boundary
           // crossing it at the right sub-voxel height (exactly for axis-aligned boundaries).
           // Slivers of a hundredth of a voxel (a wall a later pass runs along again, its
-          // planes' round-off) count in the volume but do not widen the engagement.
+          // planes' round-off) count in the volume but do not deepen the cut.
           const Eigen::Vector3d rel = p - end;
           const double side = rel.head<2>().dot(n);
           r.lateralMoment += lost * voxelVolume * side;
@@ -467,8 +502,6 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
           const double reach = (lost - 0.5) * h;
           r.zMin = std::min(r.zMin, rel.z() - reach);
           r.zMax = std::max(r.zMax, rel.z() + reach);
-          r.sMin = std::min(r.sMin, side - reach);
-          r.sMax = std::max(r.sMax, side + reach);
         }
   };
   if (leaves.size() >= 8)
@@ -478,7 +511,7 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
       work(li);
 
   Removal out;
-  double zMin = 1e300, zMax = -1e300, sMin = 1e300, sMax = -1e300;
+  double zMin = 1e300, zMax = -1e300;
   for (const LeafResult& r : results) {
     out.volume += r.volume;
     out.lateral += r.lateralMoment;
@@ -486,31 +519,13 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
     out.voxelsVisited += r.visited;
     zMin = std::min(zMin, r.zMin);
     zMax = std::max(zMax, r.zMax);
-    sMin = std::min(sMin, r.sMin);
-    sMax = std::max(sMax, r.sMax);
   }
   if (out.voxelsChanged > 0) {
     out.lateral /= out.volume;
     if (zMax >= zMin) {  // (only slivers: no width, no depth)
       out.axialDepth = std::max(0.0, std::min(zMax - std::max(zMin, 0.0), cutter.height()));
-      out.radialWidth = sMax - sMin;
       out.top = std::max(0.0, std::min(zMax, cutter.height()));
     }
-    // Engagement angle: the part of the periphery, at mid depth, with material just outside
-    // the cutter after the cut (the arc of the edge that is cutting).
-    const double zMid = std::clamp(0.5 * out.axialDepth, 0.0, cutter.height());
-    // Just outside the periphery; the fraction is interpolated trilinearly so that a wall
-    // tangent to the cutter (a slot's side) reads as about 0.5 and does not count.
-    const double reach = cutter.radiusAt(zMid) + 0.05 * h;
-    int engaged = 0;
-    for (int b = 0; b < kAngleBins; ++b) {
-      const double theta = (b + 0.5) * 2.0 * kPi / kAngleBins;
-      const Eigen::Vector2d dir = std::cos(theta) * u + std::sin(theta) * n;
-      const Eigen::Vector3d q(end.x() + reach * dir.x(), end.y() + reach * dir.y(), end.z() + zMid);
-      const openvdb::Vec3d iq(q.x() / h, q.y() / h, q.z() / h);
-      if (sampleTrilinear(acc, iq) > 0.5f) ++engaged;
-    }
-    out.engagementRad = 2.0 * kPi * engaged / kAngleBins;
   }
 
   if (s.capture && out.voxelsChanged > 0) {

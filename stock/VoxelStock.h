@@ -92,7 +92,11 @@ class VoxelStock : public Stock {
   /// volume over `dtSeconds`, mm^3/min; 0 when dtSeconds is 0) go to the capture grids.
   Removal remove(const Sweep& sweep, int step = 0, double dtSeconds = 0.0) override;
   double materialInside(const Sweep& sweep, double top) const override;
-  std::vector<double> materialAt(const std::vector<Eigen::Vector3d>& points) const override;
+  /// (The material as it is now: afterStep is not looked at.)
+  std::unique_ptr<MaterialReader> materialReader(std::size_t afterStep = kLatest) const override;
+  /// A voxel holds a wall and a cut across it as two planes; a third surface in the voxel (one
+  /// within its diagonal, 1.73 sizes, of the point) is approximated.
+  double readingReach() const override { return 2.0; }
 
   /// Write stock.vdb: grid "stock" (material fraction), grid "surface" (the stock's surface
   /// as a narrow-band level set, negative inside, 3 voxels each side) and grids "planes_0",
@@ -118,6 +122,7 @@ class VoxelStock : public Stock {
 
  private:
   struct Impl;
+  friend class VoxelReader;
   explicit VoxelStock(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };

@@ -2,27 +2,59 @@
 #include "cutters/Numbers.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace engage {
 namespace {
 
-constexpr int kAngleSamples = 90;  ///< intervals over the front half: 2 degrees
+constexpr int kAngleSamples = 30;  ///< intervals over the front half: 6 degrees
 constexpr int kMaxSlices = 64;
-constexpr int kRefinements = 8;  ///< halvings of a 2 degree interval: 0.008 degrees
-/// Contact is read this many cells outside the surface (the material share there above 1/2),
-/// and again twice as far to take the boundary's offset out (see measureEngagement).
-constexpr double kOutside = 0.25;
-constexpr double kReach = 10.0 * kPi / 180.0;  ///< how far the second boundary is looked for
+/// Every this many slices is sampled first (then halfway between any two that differ).
+constexpr std::size_t kSliceStride = 8;
+constexpr int kRefinements = 10;  ///< halvings of a 6 degree interval: 0.006 degrees
+/// Contact is read this many cells outside the surface (MaterialReader).
+constexpr double kOutside = 0.1;
+/// Where a wall the contact ends at is read again: these many cells beyond the stock's
+/// readingReach outside the surface; and how far from the first reading it is looked for (rad).
+constexpr std::array<double, 3> kWallOffsets{0.0, 1.0, 2.0};
+constexpr double kReach = 30.0 * kPi / 180.0;
+constexpr int kWallSamples = 20;  ///< over 2 kReach: 3 degrees
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// Boundaries of neighbouring slices this close are one wall's (rad: a hundredth of a degree).
+constexpr double kSameBoundary = kPi / 18000.0;
+/// Arcs shorter than this are not contact (a cell where three faces meet, the stock's top, a
+/// wall and the cut, may read as material just above the top; a contact this short carries
+/// no load), nor are gaps this short between arcs: 2 degrees.
+constexpr double kShortestArc = kPi / 90.0;
+/// Wall points whose offsets from the path's centre line agree to this share of a cell lie
+/// on a wall parallel to the path.
+constexpr double kParallel = 0.05;
+
+/// The offset of a point p (horizontal, from the axis) from the path's centre line towards the
+/// side phi = 0 (`side`; `feed` the feed direction): on an arc of signed curvature
+/// `curvature` (+ turning left), its distance from the arc's centre less the path's radius,
+/// signed so. Monotonic in phi over the front half for points on the edge's circle.
+double pathOffset(const Eigen::Vector2d& p, const Eigen::Vector2d& feed,
+                  const Eigen::Vector2d& side, double curvature) {
+  if (curvature == 0.0) return p.dot(side);
+  const Eigen::Vector2d left(-feed.y(), feed.x());
+  const Eigen::Vector2d centre = (1.0 / curvature) * left;  // + curvature: on the left
+  // The side phi = 0 points away from the centre when the centre is on the other side.
+  const double away = curvature * side.dot(left) < 0.0 ? 1.0 : -1.0;
+  return away * ((p - centre).norm() - 1.0 / std::abs(curvature));
+}
 
 }  // namespace
 
-// One function: it runs for every cutting step with --material, and its slices, angular
-// samples and boundary refinements share one sampling of the stock.
+// One function: it runs for every cutting step, and its slices, angular samples, boundary
+// refinements and wall readings share one reader of the stock.
 EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
                                  const Eigen::Vector3d& tip, const Eigen::Vector2d& feedDir,
-                                 bool clockwise, double zTop) {
+                                 bool clockwise, double zTop, double curvature,
+                                 std::size_t afterStep) {
   EdgeEngagement out;
   out.entry = out.exit = std::numeric_limits<double>::quiet_NaN();
   const double h = stock.resolution();
@@ -33,9 +65,11 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
   const Eigen::Vector2d v = clockwise ? left : Eigen::Vector2d(-left);
   out.feed = u;
   out.side = v;
-  const int n = std::clamp(static_cast<int>(std::ceil(zTop / (0.5 * h))), 1, kMaxSlices);
+  out.curvature = curvature;
+  const int n = std::clamp(static_cast<int>(std::ceil(zTop / h)), 1, kMaxSlices);
   const double dz = zTop / n;
   const double eps = kOutside * h;
+  const std::unique_ptr<MaterialReader> reader = stock.materialReader(afterStep);
 
   std::vector<EdgeSlice> slices;
   for (int k = 0; k < n; ++k) {
@@ -59,23 +93,81 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
   };
   std::vector<Eigen::Vector3d> points;
   points.reserve(slices.size() * (kAngleSamples + 1));
-  for (const EdgeSlice& s : slices)
-    for (int i = 0; i <= kAngleSamples; ++i)
-      points.push_back(point(s, kPi * i / kAngleSamples, eps));
-  const std::vector<double> share = stock.materialAt(points);
+  std::array<Eigen::Vector2d, kAngleSamples + 1> sample;  // the samples' directions
+  for (int i = 0; i <= kAngleSamples; ++i) {
+    const double phi = kPi * i / kAngleSamples;
+    sample[static_cast<std::size_t>(i)] = std::sin(phi) * u + std::cos(phi) * v;
+  }
+  // The samples of every kSliceStride-th slice (and the last), then of the slice halfway
+  // between two sampled ones where they differ: in their samples, or in radius or lead angle.
+  // A slice between two that agree takes their samples (source) and later their contact: a
+  // wall parallel to the axis is read once, not at every height.
+  const std::size_t count = slices.size();
+  std::vector<std::uint8_t> share(count * (kAngleSamples + 1), 0);
+  std::vector<std::size_t> source(count, count);  // count: not known yet
+  auto sampleSlices = [&](const std::vector<std::size_t>& list) {
+    points.clear();
+    for (const std::size_t k : list) {
+      const EdgeSlice& s = slices[k];
+      const double reach = s.radius + eps * std::sin(s.kappa);
+      const double z = tip.z() + s.z - eps * std::cos(s.kappa);
+      for (const Eigen::Vector2d& e : sample)
+        points.emplace_back(tip.x() + reach * e.x(), tip.y() + reach * e.y(), z);
+    }
+    const std::vector<std::uint8_t>& in = reader->read(points);
+    for (std::size_t q = 0; q < list.size(); ++q) {
+      std::copy_n(in.begin() + static_cast<std::ptrdiff_t>(q * (kAngleSamples + 1)),
+                  kAngleSamples + 1,
+                  share.begin() + static_cast<std::ptrdiff_t>(list[q] * (kAngleSamples + 1)));
+      source[list[q]] = list[q];
+    }
+  };
+  auto agree = [&](std::size_t a, std::size_t b) {
+    return slices[a].radius == slices[b].radius && slices[a].kappa == slices[b].kappa &&
+           std::equal(share.begin() + static_cast<std::ptrdiff_t>(a * (kAngleSamples + 1)),
+                      share.begin() + static_cast<std::ptrdiff_t>((a + 1) * (kAngleSamples + 1)),
+                      share.begin() + static_cast<std::ptrdiff_t>(b * (kAngleSamples + 1)));
+  };
+  if (count > 0) {
+    std::vector<std::size_t> list;
+    for (std::size_t k = 0; k < count; k += kSliceStride)
+      list.push_back(k);
+    if (list.back() != count - 1) list.push_back(count - 1);
+    sampleSlices(list);
+    std::vector<std::array<std::size_t, 2>> open;  // sampled ends with slices between
+    for (std::size_t q = 0; q + 1 < list.size(); ++q)
+      if (list[q + 1] > list[q] + 1) open.push_back({list[q], list[q + 1]});
+    while (!open.empty()) {
+      std::vector<std::array<std::size_t, 2>> next;
+      list.clear();
+      for (const auto& [a, b] : open) {
+        const std::size_t mid = (a + b) / 2;
+        if (agree(a, b) && slices[mid].radius == slices[a].radius) {
+          for (std::size_t k = a + 1; k < b; ++k)
+            source[k] = a;
+          continue;
+        }
+        list.push_back(mid);
+        if (mid > a + 1) next.push_back({a, mid});
+        if (b > mid + 1) next.push_back({mid, b});
+      }
+      if (!list.empty()) sampleSlices(list);
+      open = std::move(next);
+    }
+  }
 
-  // Boundaries between samples, refined by halving: (slice, low angle, high angle, low side
-  // in contact).
+  // Boundaries between samples of the sampled slices, refined by halving: (slice, low angle,
+  // high angle, low side in contact).
   struct Edge {
     std::size_t slice;
     double lo, hi;
     bool loIn;
   };
   std::vector<Edge> edges;
-  for (std::size_t k = 0; k < slices.size(); ++k)
-    for (int i = 0; i < kAngleSamples; ++i) {
-      const bool a = share[k * (kAngleSamples + 1) + i] > 0.5;
-      const bool b = share[k * (kAngleSamples + 1) + i + 1] > 0.5;
+  for (std::size_t k = 0; k < count; ++k)
+    for (int i = 0; i < kAngleSamples && source[k] == k; ++i) {
+      const bool a = share[k * (kAngleSamples + 1) + static_cast<std::size_t>(i)] != 0;
+      const bool b = share[k * (kAngleSamples + 1) + static_cast<std::size_t>(i) + 1] != 0;
       if (a != b) edges.push_back({k, kPi * i / kAngleSamples, kPi * (i + 1) / kAngleSamples, a});
     }
   auto refine = [&](std::vector<Edge>& list, double offset, int rounds) {
@@ -83,76 +175,293 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
       points.clear();
       for (const Edge& e : list)
         points.push_back(point(slices[e.slice], 0.5 * (e.lo + e.hi), offset));
-      const std::vector<double> mid = stock.materialAt(points);
+      const std::vector<std::uint8_t>& mid = reader->read(points);
       for (std::size_t i = 0; i < list.size(); ++i) {
         Edge& e = list[i];
-        ((mid[i] > 0.5) == e.loIn ? e.lo : e.hi) = 0.5 * (e.lo + e.hi);
+        ((mid[i] != 0) == e.loIn ? e.lo : e.hi) = 0.5 * (e.lo + e.hi);
       }
     }
   };
   refine(edges, eps, kRefinements);
-  // The boundary read at eps outside lies where the gap between cutter and material reaches
-  // eps, beyond the contact's true end (gap 0) by eps / (d gap / d phi). Read at 2 eps, the
-  // boundary lies about as far again: the true one is 2 phi(eps) - phi(2 eps). The second is
-  // looked for up to 10 degrees on the air side; where it is not there (a wall met at a steep
-  // angle, where both coincide, or a grazing contact) the first stays.
+  // The boundary read just outside the surface lies in a cell the cut has just crossed too,
+  // where the stock holds two surfaces in one cell (the wall the contact ends at and the cut)
+  // only approximately. The wall is read again where no cell of the cut reaches it, at
+  // kWallOffsets cells out (each within kReach of the first reading), and its trace through
+  // those three points (a circle; a line through the first two where the third is missing or
+  // in line) followed back to the cutter's surface: exact for a plane or a cylindrical wall
+  // parallel to the axis. Where the first two are missing (a wall ending there, a grazing
+  // contact) or the trace does not lead back to the surface within kReach, the first reading
+  // stays.
+  // A boundary where the slice below had the same one (the same radius and lead angle, the
+  // same side, within a hundredth of a degree: a wall parallel to the axis) takes that one's
+  // result instead of reading the wall again.
   std::vector<double> boundary(edges.size());
-  std::vector<Edge> far;  // far[i]: where edges[i] is looked for again, 2 eps out
-  for (std::size_t i = 0; i < edges.size(); ++i) {
-    const Edge& e = edges[i];
-    const double at = boundary[i] = 0.5 * (e.lo + e.hi);
-    // In contact on the low side: the air lies at higher angles.
-    if (e.loIn)
-      far.push_back({e.slice, at, std::min(kPi, at + kReach), true});
-    else
-      far.push_back({e.slice, std::max(0.0, at - kReach), at, false});
-  }
-  // Keep only those whose bracket holds the change (contact at the near end, air at the far).
-  points.clear();
-  for (const Edge& f : far) {
-    points.push_back(point(slices[f.slice], f.lo, 2.0 * eps));
-    points.push_back(point(slices[f.slice], f.hi, 2.0 * eps));
-  }
-  const std::vector<double> ends = stock.materialAt(points);
-  std::vector<Edge> bracketed;
-  std::vector<std::size_t> bracketOf;  // the index in edges
-  for (std::size_t i = 0; i < far.size(); ++i)
-    if ((ends[2 * i] > 0.5) == far[i].loIn && (ends[2 * i + 1] > 0.5) != far[i].loIn) {
-      bracketed.push_back(far[i]);
-      bracketOf.push_back(i);
+  std::vector<std::size_t> same(edges.size());  // the edge whose wall this one takes
+  // The edges of the sampled slice below the current edge's: [below, belowEnd).
+  for (std::size_t i = 0, below = 0, belowEnd = 0, start = 0; i < edges.size(); ++i) {
+    if (i > 0 && edges[i].slice != edges[i - 1].slice) {
+      below = start;
+      belowEnd = i;
+      start = i;
     }
-  refine(bracketed, 2.0 * eps, kRefinements + 2);
-  for (std::size_t i = 0; i < bracketed.size(); ++i) {
-    const double near = boundary[bracketOf[i]];
-    const double second = 0.5 * (bracketed[i].lo + bracketed[i].hi);
-    boundary[bracketOf[i]] = std::clamp(2.0 * near - second, 0.0, kPi);
+    boundary[i] = 0.5 * (edges[i].lo + edges[i].hi);
+    same[i] = i;
+    for (std::size_t j = below; j < belowEnd; ++j) {
+      const EdgeSlice &a = slices[edges[i].slice], &b = slices[edges[j].slice];
+      if (edges[j].loIn == edges[i].loIn && std::abs(boundary[j] - boundary[i]) < kSameBoundary &&
+          a.radius == b.radius && a.kappa == b.kappa) {
+        same[i] = same[j];
+        break;
+      }
+    }
   }
-  // Arcs: runs of samples in contact, their ends at the refined boundaries.
-  std::size_t next = 0;  // edges are in slice, angle order
-  for (std::size_t k = 0; k < slices.size(); ++k) {
+  std::vector<Edge> walls;  // the edges whose walls are read
+  std::vector<std::size_t> wallOf;
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    if (same[i] == i) {
+      walls.push_back(edges[i]);
+      wallOf.push_back(i);
+    }
+  constexpr std::size_t kWalls = kWallOffsets.size();
+  std::array<std::vector<Eigen::Vector2d>, kWalls> wallAt;  // [k][q]: walls[q]'s, or NaN
+  for (std::size_t k = 0; k < kWalls; ++k) {
+    const double offset = (stock.readingReach() + kWallOffsets[k]) * h;
+    // Sampled every 3 degrees within kReach of the first reading: of the changes of the same
+    // sense (the contact's side below if it was below), the one nearest that reading (a thin
+    // wall of stock beyond may hold a second change).
+    points.clear();
+    for (const Edge& e : walls) {
+      const double at = 0.5 * (e.lo + e.hi);
+      for (int j = 0; j <= kWallSamples; ++j)
+        points.push_back(point(slices[e.slice],
+                               std::clamp(at - kReach + 2.0 * kReach * j / kWallSamples, 0.0, kPi),
+                               offset));
+    }
+    const std::vector<std::uint8_t>& in = reader->read(points);
+    std::vector<Edge> found;
+    std::vector<std::size_t> of;
+    for (std::size_t q = 0; q < walls.size(); ++q) {
+      const Edge& e = walls[q];
+      const double at = 0.5 * (e.lo + e.hi);
+      const std::uint8_t* row = in.data() + q * (kWallSamples + 1);
+      double best = kNaN, bestLo = 0.0, bestHi = 0.0;
+      for (int j = 0; j < kWallSamples; ++j) {
+        const double lo = std::clamp(at - kReach + 2.0 * kReach * j / kWallSamples, 0.0, kPi);
+        const double hi = std::clamp(at - kReach + 2.0 * kReach * (j + 1) / kWallSamples, 0.0, kPi);
+        if ((row[j] != 0) != e.loIn || (row[j + 1] != 0) == e.loIn) continue;
+        const double gap = std::abs(0.5 * (lo + hi) - at);
+        if (std::isnan(best) || gap < best) {
+          best = gap;
+          bestLo = lo;
+          bestHi = hi;
+        }
+      }
+      if (std::isnan(best)) continue;
+      found.push_back({e.slice, bestLo, bestHi, e.loIn});
+      of.push_back(q);
+    }
+    refine(found, offset, kRefinements);
+    wallAt[k].assign(walls.size(), Eigen::Vector2d::Constant(kNaN));
+    for (std::size_t q = 0; q < found.size(); ++q) {
+      const Eigen::Vector3d p =
+          point(slices[found[q].slice], 0.5 * (found[q].lo + found[q].hi), offset);
+      wallAt[k][of[q]] = Eigen::Vector2d(p.x() - tip.x(), p.y() - tip.y());
+    }
+  }
+  for (std::size_t q = 0; q < walls.size(); ++q) {
+    const std::size_t i = wallOf[q];
+    const Eigen::Vector2d a = wallAt[0][q], b = wallAt[1][q], c = wallAt[2][q];
+    if (!a.allFinite() || !b.allFinite()) continue;
+    const double r = slices[edges[i].slice].radius;
+    // A wall parallel to the path (concentric with an arc): its points lie at one offset from
+    // the path's centre line, and the edge meets it where its own offset is that, to the
+    // bisection's precision however shallow the meeting.
+    {
+      double lo = pathOffset(a, u, v, curvature), hi = lo, sum = lo;
+      int found = 1;
+      for (const Eigen::Vector2d& w : {b, c})
+        if (w.allFinite()) {
+          const double o = pathOffset(w, u, v, curvature);
+          lo = std::min(lo, o);
+          hi = std::max(hi, o);
+          sum += o;
+          ++found;
+        }
+      const double at = sum / found;
+      auto edgeOffset = [&](double phi) {
+        return pathOffset(r * (std::sin(phi) * u + std::cos(phi) * v), u, v, curvature);
+      };
+      if (found == 3 && hi - lo <= kParallel * h && at <= edgeOffset(0.0) &&
+          at >= edgeOffset(kPi)) {
+        double p0 = 0.0, p1 = kPi;  // the offset falls with phi
+        for (int round = 0; round < 50; ++round) {
+          const double mid = 0.5 * (p0 + p1);
+          (edgeOffset(mid) > at ? p0 : p1) = mid;
+        }
+        const double phi = 0.5 * (p0 + p1);
+        if (std::abs(phi - boundary[i]) <= kReach) {
+          boundary[i] = phi;
+          continue;
+        }
+      }
+    }
+    // Else where the wall's trace meets the edge's circle (radius r about the axis): the
+    // circle through the three points, or the line through the first two; the meeting
+    // nearest a.
+    std::array<Eigen::Vector2d, 2> meet;
+    int meets = 0;
+    const double cross = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+    if (c.allFinite() && std::abs(cross) > 1e-9 * (b - a).squaredNorm()) {
+      // The circumcentre w of a, b, c.
+      const double a2 = a.squaredNorm(), b2 = b.squaredNorm(), c2 = c.squaredNorm();
+      const double den =
+          2.0 * (a.x() * (b.y() - c.y()) + b.x() * (c.y() - a.y()) + c.x() * (a.y() - b.y()));
+      const Eigen::Vector2d w(
+          (a2 * (b.y() - c.y()) + b2 * (c.y() - a.y()) + c2 * (a.y() - b.y())) / den,
+          (a2 * (c.x() - b.x()) + b2 * (a.x() - c.x()) + c2 * (b.x() - a.x())) / den);
+      const double rw = (a - w).norm(), dw = w.norm();
+      const double along = (r * r - rw * rw + dw * dw) / (2.0 * dw);
+      const double across2 = r * r - along * along;
+      if (dw > 0.0 && across2 >= 0.0) {
+        const Eigen::Vector2d e = w / dw, across(-e.y(), e.x());
+        meet[meets++] = along * e + std::sqrt(across2) * across;
+        meet[meets++] = along * e - std::sqrt(across2) * across;
+      }
+    } else {
+      // |a + t (b - a)| = r.
+      const Eigen::Vector2d d = b - a;
+      const double qa = d.squaredNorm(), qb = 2.0 * a.dot(d), qc = a.squaredNorm() - r * r;
+      const double disc = qb * qb - 4.0 * qa * qc;
+      if (qa > 1e-18 && disc >= 0.0)
+        for (const double t :
+             {(-qb + std::sqrt(disc)) / (2.0 * qa), (-qb - std::sqrt(disc)) / (2.0 * qa)})
+          meet[meets++] = a + t * d;
+    }
+    if (meets == 0) continue;
+    const Eigen::Vector2d m =
+        meets == 2 && (meet[1] - a).norm() < (meet[0] - a).norm() ? meet[1] : meet[0];
+    const double phi = std::atan2(m.dot(u), m.dot(v));
+    if (phi >= -1e-9 && phi <= kPi + 1e-9 && std::abs(phi - boundary[i]) <= kReach)
+      boundary[i] = std::clamp(phi, 0.0, kPi);
+  }
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    if (same[i] != i) boundary[i] = boundary[same[i]];
+  // Arcs: runs of samples in contact, their ends at the refined boundaries; a slice between
+  // two that agreed takes its source's.
+  std::vector<std::size_t> kept;  // the index in slices of each of out.slices
+  std::size_t next = 0;           // edges are in slice, angle order
+  for (std::size_t k = 0; k < count; ++k) {
     EdgeSlice& s = slices[k];
-    double start = -1.0;
-    for (int i = 0; i <= kAngleSamples; ++i) {
-      const bool in = share[k * (kAngleSamples + 1) + i] > 0.5;
-      if (i == 0 && in) start = 0.0;
-      if (i > 0) {
-        const bool was = share[k * (kAngleSamples + 1) + i - 1] > 0.5;
-        if (was != in) {
+    if (source[k] != k) {
+      s.arcs = slices[source[k]].arcs;
+    } else {
+      const std::uint8_t* row = share.data() + k * (kAngleSamples + 1);
+      double start = -1.0;
+      for (int i = 0; i <= kAngleSamples; ++i) {
+        const bool in = row[i] != 0;
+        if (i == 0 && in) start = 0.0;
+        if (i > 0 && (row[i - 1] != 0) != in) {
           const double at = boundary[next++];
           if (in)
             start = at;
           else
             s.arcs.push_back({start, at});
         }
+        if (i == kAngleSamples && in) s.arcs.push_back({start, kPi});
       }
-      if (i == kAngleSamples && in) s.arcs.push_back({start, kPi});
+      // Arcs whose ends, followed to the wall, overlap or leave less than kShortestArc
+      // between them are one (a cell the cut crossed read as air inside the contact); then
+      // arcs shorter than that are dropped.
+      std::sort(s.arcs.begin(), s.arcs.end());
+      std::vector<std::array<double, 2>> joined;
+      for (const auto& a : s.arcs)
+        if (!joined.empty() && a[0] <= joined.back()[1] + kShortestArc)
+          joined.back()[1] = std::max(joined.back()[1], a[1]);
+        else
+          joined.push_back(a);
+      s.arcs.clear();
+      for (const auto& a : joined)
+        if (a[1] - a[0] >= kShortestArc) s.arcs.push_back(a);
     }
     if (s.arcs.empty()) continue;
     out.entry = std::isnan(out.entry) ? s.arcs.front()[0] : std::min(out.entry, s.arcs.front()[0]);
     out.exit = std::isnan(out.exit) ? s.arcs.back()[1] : std::max(out.exit, s.arcs.back()[1]);
-    out.slices.push_back(std::move(s));
+    out.slices.push_back(s);
+    kept.push_back(k);
+  }
+  if (out.slices.empty()) return out;
+  // The contact's top and bottom to a slice's middle: found between the last slice in contact
+  // and the next one's middle (or the flutes' top), at the middle of the end slice's widest
+  // arc, and that slice made to end there.
+  auto widestMiddle = [](const EdgeSlice& s) {
+    std::array<double, 2> best = s.arcs.front();
+    for (const auto& a : s.arcs)
+      if (a[1] - a[0] > best[1] - best[0]) best = a;
+    return 0.5 * (best[0] + best[1]);
+  };
+  auto at = [&](const EdgeSlice& s, double z, double phi) {
+    EdgeSlice q = s;
+    q.z = z;
+    q.radius = cutter.radiusAt(z);
+    return point(q, phi, eps);
+  };
+  auto bisect = [&](const EdgeSlice& s, double in, double air, double phi) {
+    points.assign({at(s, air, phi)});
+    if (reader->read(points)[0] != 0 || !(cutter.radiusAt(air) > 1e-9)) return kNaN;
+    for (int round = 0; round < kRefinements + 4; ++round) {
+      const double mid = 0.5 * (in + air);
+      points.assign({at(s, mid, phi)});
+      (reader->read(points)[0] != 0 ? in : air) = mid;
+    }
+    return 0.5 * (in + air);
+  };
+  {
+    EdgeSlice& top = out.slices.back();
+    const bool last = kept.back() + 1 == slices.size();
+    const double bottom = top.z - 0.5 * top.dz;
+    const double end = bisect(top, top.z, last ? zTop : top.z + top.dz, widestMiddle(top));
+    if (!std::isnan(end)) {
+      top.dz = end - bottom;
+      top.z = 0.5 * (bottom + end);
+      top.radius = cutter.radiusAt(top.z);
+    }
+  }
+  {
+    EdgeSlice& low = out.slices.front();
+    const double top = low.z + 0.5 * low.dz;
+    if (kept.front() > 0 && low.z - low.dz > 0.0) {
+      const double end = bisect(low, low.z, low.z - low.dz, widestMiddle(low));
+      if (!std::isnan(end)) {
+        low.dz = top - end;
+        low.z = 0.5 * (top + end);
+        low.radius = cutter.radiusAt(low.z);
+      }
+    }
   }
   return out;
+}
+
+double radialDepth(const EdgeEngagement& e) {
+  if (!e.any()) return kNaN;
+  auto offset = [&](double radius, double phi) {
+    return pathOffset(radius * (std::sin(phi) * e.feed + std::cos(phi) * e.side), e.feed, e.side,
+                      e.curvature);
+  };
+  double widest = 0.0;
+  for (const EdgeSlice& s : e.slices) {
+    double sum = 0.0;
+    for (const auto& a : s.arcs)
+      sum += std::abs(offset(s.radius, a[0]) - offset(s.radius, a[1]));
+    widest = std::max(widest, sum);
+  }
+  return widest;
+}
+
+double axialDepth(const EdgeEngagement& e) {
+  if (!e.any()) return kNaN;
+  const EdgeSlice& low = e.slices.front();
+  const EdgeSlice& top = e.slices.back();
+  return top.z + 0.5 * top.dz - (low.z - 0.5 * low.dz);
 }
 
 }  // namespace engage

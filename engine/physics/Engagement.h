@@ -49,21 +49,38 @@ struct EdgeEngagement {
   Eigen::Vector2d feed{1.0, 0.0}, side{0.0, 1.0};
   /// The smallest start and largest end of the arcs, rad (NaN without contact).
   double entry = 0.0, exit = 0.0;
+  /// The path's signed curvature at the step's end, 1/mm (+ turning left; 0 straight): the
+  /// frame radialDepth measures in.
+  double curvature = 0.0;
   bool any() const { return !slices.empty(); }
 };
 
 /// Measure the contact of `cutter` with its tip at `tip`, moving horizontally along `feed`
 /// (any length, not zero), spinning clockwise seen from above (M3) or not (M4), up to `zTop`
-/// above the tip (the flutes, clipped to the stock's top). Slices about half a cell thick (at
-/// most 64); angles sampled every 2 degrees and their boundaries refined to a hundredth of
-/// a degree. A point counts as in contact when the stock's material share a quarter cell
-/// outside the cutter's surface reads above 1/2 (closer, the interpolated share of a cell on
-/// two faces, the front of the cut and a side, drops below 1/2 where there is material). A
-/// boundary read so is beyond the true one by 0.25 h / (d gap / d phi) (1.9 deg for a 10 %
-/// side cut of a 10 mm cutter at 0.5 mm cells); reading it again half a cell out and
-/// extrapolating to the surface takes that out to first order.
+/// above the tip (the flutes, clipped to the stock's top), in the stock as it was after step
+/// `afterStep` of its last batch (Stock::materialReader), the path's signed curvature there
+/// `curvature` (1/mm, + turning left). Slices a cell thick (at most 64; one
+/// between two that read the same takes their contact); the edge sampled every 6 degrees a
+/// tenth of a cell outside the cutter's surface (Stock::materialReader: to a fraction of a
+/// cell), each boundary refined by bisection, then read again where it ends at a wall: the
+/// wall beyond the cells the step's cut crossed (Stock::readingReach), its trace through three
+/// points followed back to the edge (exact for plane and cylindrical walls). The top and
+/// bottom slices end where the contact does, found by bisection. Arcs and gaps shorter than 2
+/// degrees are dropped. docs/physics.md "The contact"; accuracy: docs/accuracy.md.
 EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
                                  const Eigen::Vector3d& tip, const Eigen::Vector2d& feed,
-                                 bool clockwise, double zTop);
+                                 bool clockwise, double zTop, double curvature = 0.0,
+                                 std::size_t afterStep = Stock::kLatest);
+
+/// The radial depth of cut a_e of a contact, mm: per slice, how far the arcs in contact
+/// reach across the path, measured from the path's centre line (straight) or as distances
+/// from the arc's centre (e.curvature: the stepover between two concentric passes, not the
+/// chord across the crescent), summed over the slice's arcs; the largest over the slices. A
+/// slot reads the diameter; NaN without contact.
+double radialDepth(const EdgeEngagement& e);
+
+/// The axial depth of cut a_p: from the bottom of the lowest slice in contact to the top of
+/// the highest, mm (NaN without contact).
+double axialDepth(const EdgeEngagement& e);
 
 }  // namespace engage

@@ -4,6 +4,8 @@
 #include "cutters/Numbers.h"
 #include "cutters/Sweep.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -239,28 +241,47 @@ bool retractsFromCut(const std::vector<Planned>& plan, const Toolpath& path, std
          (stepPath(m, before.t0, before.t1).end - sp.start).squaredNorm() <= 1e-18;
 }
 
-/// The load of one step (engine/physics) at its programmed feed.
-StepLoad stepLoad(const PhysicsOptions& o, const Move& m, const StepPath& sp, const StepRecord& r,
-                  const Removal& rem, const AptCutter& cutter, const Stock& stock,
-                  SimulationResult& out) {
+/// The contact of one cutting step at its end (engine/physics/Engagement.h), measured once for
+/// the step's width, depth, angles and load: none for a rapid, a step in air, or one without
+/// horizontal motion (a plunge). The spindle's direction from the move, else `spindleRpm`
+/// (clockwise when neither says).
+struct StepContact {
+  EdgeEngagement edge;
+  double horizontal = 0.0;  ///< the horizontal share of the step's direction at its end
+  double rpm = 0.0;         ///< the spindle speed the step runs at (0: stopped or unknown)
+};
+
+StepContact measureContact(const Move& m, const StepPath& sp, const Removal& rem,
+                           const AptCutter& cutter, const Stock& stock, double spindleRpm,
+                           std::size_t afterStep) {
+  StepContact c;
+  const double h = stock.resolution();
+  if (m.kind == MoveKind::Rapid || !(rem.volume > kAirVoxels * h * h * h)) return c;
+  // The direction at the step's end, and how much of it is horizontal.
+  const Eigen::Vector3d d = sp.end - sp.at(std::max(0.0, 1.0 - 1e-3));
+  c.horizontal = d.norm() > 0.0 ? d.head<2>().norm() / d.norm() : 0.0;
+  c.rpm = m.spindleRpm != 0.0 ? m.spindleRpm : spindleRpm;
+  if (c.horizontal < 1e-3) return c;
+  c.edge = measureEngagement(stock, cutter, sp.end, d.head<2>(), c.rpm >= 0.0,
+                             std::min(cutter.height(), rem.top + h), curvatureOf(m), afterStep);
+  return c;
+}
+
+/// The load of one step (engine/physics) at its programmed feed, from its contact.
+StepLoad stepLoad(const PhysicsOptions& o, const Move& m, const StepRecord& r, const StepContact& c,
+                  const AptCutter& cutter, const Stock& stock, SimulationResult& out) {
   StepLoad load;
   load.exponent = o.material.exponent();
   load.entry = load.exit = kNaN;
   const double h = stock.resolution();
   if (m.kind == MoveKind::Rapid || !(r.removed > kAirVoxels * h * h * h)) return load;
-  // The direction at the step's end, and how much of it is horizontal.
-  const Eigen::Vector3d d = sp.end - sp.at(std::max(0.0, 1.0 - 1e-3));
-  const double horizontal = d.norm() > 0.0 ? d.head<2>().norm() / d.norm() : 0.0;
-  const double rpm = m.spindleRpm != 0.0 ? m.spindleRpm : o.spindleRpm;
-  if (horizontal < 1e-3 || rpm == 0.0) {
-    ++(horizontal < 1e-3 ? out.plungeSteps : out.stoppedSteps);
+  if (c.horizontal < 1e-3 || c.rpm == 0.0) {
+    ++(c.horizontal < 1e-3 ? out.plungeSteps : out.stoppedSteps);
     return unmodelledLoad();
   }
-  const EdgeEngagement e = measureEngagement(stock, cutter, sp.end, d.head<2>(), rpm > 0.0,
-                                             std::min(cutter.height(), rem.top + h));
   const int flutes = cutter.fluteCount();
-  const double fz = r.feed / (std::abs(rpm) * flutes) * horizontal;
-  return cuttingLoad(e, o.material, {flutes, o.helix, cutter.maxRadius()}, fz, rpm);
+  const double fz = r.feed / (std::abs(c.rpm) * flutes) * c.horizontal;
+  return cuttingLoad(c.edge, o.material, {flutes, o.helix, cutter.maxRadius()}, fz, c.rpm);
 }
 
 /// Each tool's non-cutting parts (shank, holder), each with its shape a cell slimmer.
@@ -389,11 +410,13 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   // Plan the steps first (for progress and for the records).
   const std::vector<Planned> plan = planSteps(path, L, options.maxSteps);
 
-  // Steps go to the stock in batches when nothing reads it between them but their tool's
-  // shank and holder (asked by the stock after each step's removal; no cutting physics, no
-  // per-step timing): the dexel stock removes a batch tile by tile, the tiles side by side
-  // (stock/DexelStock.h), to the same numbers.
-  const bool batches = !options.physics && !options.timeSteps;
+  // Steps go to the stock in batches where it can tell each step's contact as it was after
+  // that step (Stock::readsWithinBatch) and nothing else reads it between them but their
+  // tool's shank and holder (asked by the stock after each step's removal; no per-step
+  // timing): the dexel stock removes a batch tile by tile, the tiles side by side
+  // (stock/DexelStock.h), to the same numbers; the steps' contacts are then measured side by
+  // side.
+  const bool batches = stock.readsWithinBatch() && !options.timeSteps;
   // A batch ends at 128 steps or at steps whose boxes hold 8192 columns of the stock's
   // resolution: small steps (a few dozen columns each) need many to give the cores tiles
   // enough, large ones fewer; more would hold the batch's sweeps and records in memory for
@@ -447,6 +470,20 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
     if (options.timeSteps)  // (one step a batch)
       out.stepSeconds.push_back(
           std::chrono::duration<double>(std::chrono::steady_clock::now() - stepStart).count());
+    // Each step's contact, as the stock was after it (independent of one another).
+    std::vector<StepContact> contacts(batch.size());
+    const double spindleRpm = options.physics ? options.physics->spindleRpm : 0.0;
+    auto measure = [&](std::size_t k) {
+      if (batch[k].cut < 0) return;
+      const Move& m = path.moves[plan[first + k].move];
+      contacts[k] = measureContact(
+          m, batch[k].sp, removals[static_cast<std::size_t>(batch[k].cut)], cutters.of(m.tool),
+          stock, spindleRpm, batches ? static_cast<std::size_t>(batch[k].cut) : Stock::kLatest);
+    };
+    if (batch.size() > 1)
+      tbb::parallel_for(std::size_t(0), batch.size(), measure);
+    else if (!batch.empty())
+      measure(0);
     for (std::size_t k = 0; k < batch.size(); ++k) {
       const std::size_t si = first + k;
       const Planned& p = plan[si];
@@ -458,11 +495,19 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
           batch[k].cut >= 0 ? removals[static_cast<std::size_t>(batch[k].cut)] : Removal{};
       r.removed = rem.volume;
       r.voxelsChanged = static_cast<std::int32_t>(rem.voxelsChanged);
-      r.width = rem.radialWidth;
-      r.depth = rem.axialDepth;
-      r.engagementRad = rem.engagementRad;
       r.mrr = r.dt > 0.0 ? r.removed / (r.dt / 60.0) : 0.0;
       r.curvature = curvatureOf(m);
+      // The cut's width, depth and angle from its contact; a plunge's from what it removed:
+      // the cutter's diameter at that depth.
+      const StepContact& contact = contacts[k];
+      if (contact.edge.any()) {
+        r.width = radialDepth(contact.edge);
+        r.depth = axialDepth(contact.edge);
+        r.engagementRad = contact.edge.exit - contact.edge.entry;
+      } else if (r.removed > kAirVoxels * h * h * h && m.kind != MoveKind::Rapid) {
+        r.depth = rem.axialDepth;
+        r.width = contact.horizontal < 1e-3 ? 2.0 * cutter.radiusAt(r.depth) : 0.0;
+      }
       out.removed += r.removed;
       out.voxelsChanged += r.voxelsChanged;
       stepCollisions(out, m, p.move, si, rem, batch[k].parts, h);
@@ -473,7 +518,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
         r.side = r.curvature * rem.lateral < 0.0 ? PathSide::Concave : PathSide::Convex;
 
       if (options.physics)
-        out.loads.push_back(stepLoad(*options.physics, m, sp, r, rem, cutter, stock, out));
+        out.loads.push_back(stepLoad(*options.physics, m, r, contact, cutter, stock, out));
 
       // The analytic model of this step: its stepover and depth (given or measured).
       r.mrrExact = r.mrrPaper = 0.0;

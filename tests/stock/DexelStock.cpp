@@ -288,7 +288,7 @@ TEST_CASE(
     std::vector<double> numbers, met;  // every field of every step's removal; the holder's
     for (const Removal& r : steps) {
       numbers.insert(numbers.end(),
-                     {r.volume, r.axialDepth, r.radialWidth, r.top, r.engagementRad, r.lateral,
+                     {r.volume, r.axialDepth, r.top, r.lateral,
                       static_cast<double>(r.voxelsChanged), static_cast<double>(r.voxelsVisited)});
       for (const auto& [slimMet, fullMet] : r.partsMet)
         met.insert(met.end(), {slimMet, slimMet > threshold ? fullMet : 0.0});

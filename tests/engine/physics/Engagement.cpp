@@ -9,11 +9,13 @@
 #include "cutters/Sweep.h"
 #include "stock/DexelStock.h"
 #include "tests/stock/StockTestSupport.h"
+#include "tests/support/ContactCases.h"
 
 #include <catch2/catch.hpp>
 
 #include <cmath>
 #include <memory>
+#include <string>
 
 using namespace engage;
 
@@ -50,13 +52,12 @@ TEST_CASE("engagement of a flat end mill: slot, up and down milling, against clo
   const AptCutter flat = AptCutter::flat(D, 20.0);
   for (const bool voxel : {true, false}) {
     CAPTURE(voxel);
-    // Tolerances: a boundary is found where the material 0.1 cell outside the surface reads
-    // 1/2, which lies 0.1 h / (d gap / d phi) beyond the true one: for ae = 1 mm,
-    // d gap / d phi = R^2 sin(phi_ex) / (R - ae) = 3.75 mm/rad -> 0.3 deg; the stock's own
-    // boundary is within a few hundredths of a cell (voxel fractions) or up to half a ray
-    // spacing (dexel: columns straddling a wall) -> 0.5 deg voxel, 2.5 deg dexel. The engaged
-    // height is the depth to half a slice (h / 4) at each end.
-    const double angleTol = (voxel ? 0.5 : 2.5) * kPi / 180.0;
+    // Tolerances: a boundary is read where the wall it ends at, read beyond the cells the cut
+    // crossed and followed back to the cutter, meets the edge: exact for these plane walls
+    // to the readers' hundredth of a cell (0.01 h / (d gap / d phi) <= 0.03 deg here) and the
+    // bisection's 0.006 deg; 0.1 deg. The engaged height is the depth, its top found by
+    // bisection to 0.001 mm.
+    const double angleTol = 0.1 * kPi / 180.0;
     SECTION("a slot engages the whole front half over the depth") {
       auto stock = cutBlock(voxel, 0.0);
       const EdgeEngagement e =
@@ -64,7 +65,9 @@ TEST_CASE("engagement of a flat end mill: slot, up and down milling, against clo
       REQUIRE(e.any());
       CHECK(e.entry == Approx(0.0).margin(angleTol));
       CHECK(e.exit == Approx(kPi).margin(angleTol));
-      CHECK(engagedHeight(e) == Approx(ap).margin(0.5 * h));
+      CHECK(engagedHeight(e) == Approx(ap).margin(1e-3));
+      CHECK(axialDepth(e) == Approx(ap).margin(1e-3));
+      CHECK(radialDepth(e) == Approx(D).epsilon(1e-3));
       for (const EdgeSlice& s : e.slices) {
         CHECK(s.kappa == Approx(kPi / 2).margin(1e-9));  // a cylinder
         CHECK(s.radius == Approx(R));
@@ -81,7 +84,8 @@ TEST_CASE("engagement of a flat end mill: slot, up and down milling, against clo
       const double phiEx = std::acos(1.0 - 2.0 * ae / D);  // 36.87 deg
       CHECK(e.entry == Approx(0.0).margin(angleTol));
       CHECK(e.exit == Approx(phiEx).margin(angleTol));
-      CHECK(engagedHeight(e) == Approx(ap).margin(0.5 * h));
+      CHECK(engagedHeight(e) == Approx(ap).margin(1e-3));
+      CHECK(radialDepth(e) == Approx(ae).epsilon(0.01));
       // The same cut with a counter-clockwise spindle (M4) is down milling.
       const EdgeEngagement m4 =
           measureEngagement(*stock, flat, {0.0, yc, -ap}, {1.0, 0.0}, false, 3.0);
@@ -94,11 +98,10 @@ TEST_CASE("engagement of a flat end mill: slot, up and down milling, against clo
       const EdgeEngagement e =
           measureEngagement(*stock, flat, {0.0, 20.0, -ap}, {1.0, 0.0}, true, 3.0);
       REQUIRE(e.any());
-      // The entry is where the block's own side face crosses the cut's front: within a cell
-      // of that corner a voxel's interpolated share is no distance; a cell along the arc,
-      // h / R = 2.3 deg (measured 0.94 deg).
-      CHECK(e.entry == Approx(kPi / 2).margin(voxel ? h / R : angleTol));
+      // The entry is where the block's own side face crosses the cut's front.
+      CHECK(e.entry == Approx(kPi / 2).margin(angleTol));
       CHECK(e.exit == Approx(kPi).margin(angleTol));
+      CHECK(radialDepth(e) == Approx(R).epsilon(0.01));
     }
     SECTION("in air nothing is engaged") {
       auto stock = cutBlock(voxel, 0.0);
@@ -136,4 +139,27 @@ TEST_CASE("engagement of a ball end mill: the lead angle and a shallow cut's con
     top = std::max(top, s.z + 0.5 * s.dz);
   }
   CHECK(top == Approx(depth).margin(0.05));  // half a 0.1 mm ray spacing, rounded to a slice
+}
+
+TEST_CASE("the radial depth and the contact's angles on concave and convex arcs", "[physics]") {
+  // tests/support/ContactCases.h: a full circle leaves a cylindrical wall, a three-quarter
+  // arc beside it cuts a band of width ae (the closed-form contact there: arcAngles). Three
+  // stepovers, both directions of travel, the arcs' centre off the grid.
+  const Eigen::Vector3d centre(0.137, -0.261, 0.0);
+  for (const char* model : {"dexel", "voxel"})
+    for (const double cells : {20.0, 40.0})
+      for (const bool concave : {true, false})
+        for (const bool clockwise : {true, false})
+          for (const double ae : {1.0, 2.5, 5.0}) {
+            const double rho = 20.0, h = D / cells;
+            CAPTURE(model, cells, concave, clockwise, ae);
+            const EdgeEngagement e = test::arcContact(
+                model, h, R, ap, rho, concave ? rho - ae : rho + ae, clockwise, centre);
+            REQUIRE(e.any());
+            // The issue's bounds: the width within 2 %, the angles within 0.5 deg.
+            CHECK(radialDepth(e) == Approx(ae).epsilon(0.02));
+            const std::array<double, 2> want = test::arcAngles(R, rho, ae, concave, clockwise);
+            CHECK(e.entry == Approx(want[0]).margin(0.5 * kPi / 180.0));
+            CHECK(e.exit == Approx(want[1]).margin(0.5 * kPi / 180.0));
+          }
 }
