@@ -426,7 +426,7 @@ class DexelReader final : public MaterialReader {
   /// Ray k's intervals after step after_ of the last batch: what it held before the first
   /// later step changed it, else what it holds.
   std::pair<const DexelStock::Interval*, const DexelStock::Interval*> ray(std::size_t k) const {
-    if (after_ != Stock::kLatest) {
+    if (after_ != Stock::kLatest && s_.changed_[k]) {
       const auto found = s_.beforeOf_.find(k);
       if (found != s_.beforeOf_.end())
         for (std::size_t q = found->second; q < s_.before_.size() && s_.before_[q].ray == k; ++q)
@@ -810,6 +810,8 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
 
   // The rays' earlier intervals, by ray and step (a tile logs its rays in step order; tiles
   // hold different rays).
+  for (const Before& b : before_)
+    changed_[b.ray] = false;
   before_.clear();
   beforeIntervals_.clear();
   for (Tile& tile : tiles) {
@@ -823,8 +825,11 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
   std::stable_sort(before_.begin(), before_.end(),
                    [](const Before& a, const Before& b) { return a.ray < b.ray; });
   beforeOf_.clear();
-  for (std::size_t q = 0; q < before_.size(); ++q)
+  if (changed_.size() != rays_.size()) changed_.assign(rays_.size(), false);
+  for (std::size_t q = 0; q < before_.size(); ++q) {
     beforeOf_.try_emplace(before_[q].ray, q);
+    changed_[before_[q].ray] = true;
+  }
 
   // Each step's sums, tile by tile; the loss columns its tiles started join lost_.
   std::vector<Removal> outs(steps.size());

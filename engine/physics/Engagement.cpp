@@ -22,6 +22,9 @@ constexpr double kOutside = 0.1;
 constexpr std::array<double, 3> kWallOffsets{0.0, 1.0, 2.0};
 constexpr double kReach = 30.0 * kPi / 180.0;
 constexpr int kWallSamples = 20;  ///< over 2 kReach: 3 degrees
+/// A wall is read at most this many times its offset out in a slice's plane (sin 30 deg: the
+/// edge's surface at a lead angle kappa lies offset / sin(kappa) away horizontally).
+constexpr double kSteepest = 0.5;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// Boundaries of neighbouring slices this close are one wall's (rad: a hundredth of a degree).
 constexpr double kSameBoundary = kPi / 18000.0;
@@ -170,11 +173,19 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
       const bool b = share[k * (kAngleSamples + 1) + static_cast<std::size_t>(i) + 1] != 0;
       if (a != b) edges.push_back({k, kPi * i / kAngleSamples, kPi * (i + 1) / kAngleSamples, a});
     }
-  auto refine = [&](std::vector<Edge>& list, double offset, int rounds) {
+  // A wall's point `offset` beyond the edge in the slice's own plane (the wall's trace there;
+  // the distance from the edge's surface at least `offset` on a sloping side).
+  auto wallPoint = [&](const EdgeSlice& s, double phi, double offset) {
+    const Eigen::Vector2d e = std::sin(phi) * u + std::cos(phi) * v;
+    const double reach = s.radius + offset / std::max(std::sin(s.kappa), kSteepest);
+    return Eigen::Vector3d(tip.x() + reach * e.x(), tip.y() + reach * e.y(), tip.z() + s.z);
+  };
+  auto refine = [&](std::vector<Edge>& list, double offset, int rounds, bool wall = false) {
     for (int round = 0; round < rounds && !list.empty(); ++round) {
       points.clear();
       for (const Edge& e : list)
-        points.push_back(point(slices[e.slice], 0.5 * (e.lo + e.hi), offset));
+        points.push_back(wall ? wallPoint(slices[e.slice], 0.5 * (e.lo + e.hi), offset)
+                              : point(slices[e.slice], 0.5 * (e.lo + e.hi), offset));
       const std::vector<std::uint8_t>& mid = reader->read(points);
       for (std::size_t i = 0; i < list.size(); ++i) {
         Edge& e = list[i];
@@ -233,9 +244,9 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     for (const Edge& e : walls) {
       const double at = 0.5 * (e.lo + e.hi);
       for (int j = 0; j <= kWallSamples; ++j)
-        points.push_back(point(slices[e.slice],
-                               std::clamp(at - kReach + 2.0 * kReach * j / kWallSamples, 0.0, kPi),
-                               offset));
+        points.push_back(
+            wallPoint(slices[e.slice],
+                      std::clamp(at - kReach + 2.0 * kReach * j / kWallSamples, 0.0, kPi), offset));
     }
     const std::vector<std::uint8_t>& in = reader->read(points);
     std::vector<Edge> found;
@@ -260,11 +271,11 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
       found.push_back({e.slice, bestLo, bestHi, e.loIn});
       of.push_back(q);
     }
-    refine(found, offset, kRefinements);
+    refine(found, offset, kRefinements, true);
     wallAt[k].assign(walls.size(), Eigen::Vector2d::Constant(kNaN));
     for (std::size_t q = 0; q < found.size(); ++q) {
       const Eigen::Vector3d p =
-          point(slices[found[q].slice], 0.5 * (found[q].lo + found[q].hi), offset);
+          wallPoint(slices[found[q].slice], 0.5 * (found[q].lo + found[q].hi), offset);
       wallAt[k][of[q]] = Eigen::Vector2d(p.x() - tip.x(), p.y() - tip.y());
     }
   }

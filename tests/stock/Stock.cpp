@@ -106,3 +106,33 @@ TEST_CASE("a dexel stock reads the material as it was after each step of a batch
         batch->materialReader(sweeps.size() - 1)->read(points));
   CHECK_FALSE(boxStock("voxel", b, h)->readsWithinBatch());
 }
+
+TEST_CASE("a rib between two cuts reads its two walls where each cell's neighbours hold both",
+          "[stock]") {
+  // A rib 1.6 cells wide left between two slots at 30 degrees to the grid: a column crossed by
+  // one wall has the other among its 3 x 3 neighbours, and a line across it from the central
+  // differences alone tilts (the dexel stock's one-sided differences keep it). Points 0.02
+  // cells either side of each wall read the side they lie on.
+  const double h = 0.3, r = 3.0, half = 0.8 * h;
+  const AptCutter flat = AptCutter::flat(2 * r, 18.0);
+  for (const char* model : {"dexel", "voxel"}) {
+    CAPTURE(model);
+    Box3 b;
+    b.min = {-30, -30, -10};
+    b.max = {30, 30, 0};
+    std::unique_ptr<Stock> s = boxStock(model, b, h);
+    const Eigen::Vector3d a(-20.0, -5.0, -2.0);
+    for (const double side : {-1.0, 1.0})
+      s->remove(Sweep(
+          flat, line(a + side * (half + r) * kSide, a + side * (half + r) * kSide + 40.0 * kDir),
+          h));
+    const double e = 0.02 * h;
+    for (double t = 8.0; t <= 32.0; t += 0.71) {
+      const Eigen::Vector3d c = a + t * kDir + Eigen::Vector3d(0, 0, 1.0);
+      for (const double side : {-1.0, 1.0}) {
+        CHECK(inMaterial(*s, c + side * (half - e) * kSide));
+        CHECK_FALSE(inMaterial(*s, c + side * (half + e) * kSide));
+      }
+    }
+  }
+}

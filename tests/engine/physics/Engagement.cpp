@@ -163,3 +163,43 @@ TEST_CASE("the radial depth and the contact's angles on concave and convex arcs"
             CHECK(e.exit == Approx(want[1]).margin(0.5 * kPi / 180.0));
           }
 }
+
+TEST_CASE(
+    "a ball end mill's side cut beside its previous pass: the stepover and each slice's "
+    "entry",
+    "[physics]") {
+  // A 10 mm ball 2 mm deep, a pass at stepover s from the previous one (the stock on the
+  // cutter's right: down milling under M3), the stock's top and the passes off the grid. At
+  // height z above the tip the edge's radius is r(z) and the previous pass's wall lies at
+  // s - r(z) across the path (above the cusp, r(z) > s / 2): the slice engages from
+  // acos((s - r(z)) / r(z)) to pi, and the radial depth is s. Tolerances (D/20): the width
+  // within 1 % (measured 0.9 %: the slice a cell thick nearest the cusp reads a little
+  // wider), each slice's entry within 0.5 deg (measured 0.43 deg).
+  const double h = 0.5, ap = 2.0;
+  const AptCutter ball = AptCutter::ball(D, 20.0);
+  for (const char* model : {"dexel", "voxel"})
+    for (const double s : {1.0, 2.0}) {
+      CAPTURE(model, s);
+      Box3 b;
+      b.min = {-30, -20, -20};
+      b.max = {30, 20, 0.13};
+      std::unique_ptr<Stock> st = test::boxStock(model, b, h);
+      const double yc = 0.21, z = b.max.z() - ap;
+      st->remove(Sweep(ball, test::line({-40, yc + s, z}, {40, yc + s, z}), h));
+      const Eigen::Vector3d end(0.0, yc, z);
+      st->remove(Sweep(ball, test::line(end - Eigen::Vector3d(40, 0, 0), end), h));
+      const EdgeEngagement e = measureEngagement(*st, ball, end, {1.0, 0.0}, true, ap + h);
+      REQUIRE(e.any());
+      CHECK(radialDepth(e) == Approx(s).epsilon(0.01));
+      int checked = 0;
+      for (const EdgeSlice& slice : e.slices) {
+        if (slice.radius <= s / 2) continue;
+        REQUIRE(!slice.arcs.empty());
+        CHECK(slice.arcs.front()[0] ==
+              Approx(std::acos((s - slice.radius) / slice.radius)).margin(0.5 * kPi / 180));
+        CHECK(slice.arcs.back()[1] == Approx(kPi).margin(0.5 * kPi / 180));
+        ++checked;
+      }
+      CHECK(checked >= 3);
+    }
+}
