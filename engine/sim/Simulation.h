@@ -87,6 +87,9 @@ struct StepRecord {
   double dt = 0.0;    ///< length / feed (0 for rapids)
   double removed = 0.0;
   double mrr = 0.0;  ///< removed / dt (0 for rapids)
+  /// From the step's contact (engine/physics/Engagement.h): the radial depth of cut a_e, mm
+  /// (on an arc the stepover beside the wall; a plunge: the diameter engaged at its depth);
+  /// the axial depth a_p, mm; the engaged angle, exit minus entry, rad.
   double width = 0.0;
   double depth = 0.0;
   double engagementRad = 0.0;
