@@ -426,7 +426,7 @@ class DexelReader final : public MaterialReader {
   /// Ray k's intervals after step after_ of the last batch: what it held before the first
   /// later step changed it, else what it holds.
   std::pair<const DexelStock::Interval*, const DexelStock::Interval*> ray(std::size_t k) const {
-    if (after_ != Stock::kLatest && s_.changed_[k]) {
+    if (after_ != Stock::kLatest) {
       const auto found = s_.beforeOf_.find(k);
       if (found != s_.beforeOf_.end())
         for (std::size_t q = found->second; q < s_.before_.size() && s_.before_[q].ray == k; ++q)
@@ -712,25 +712,25 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
     LostColumn* column = nullptr;  // this ray's losses, found or started on its first loss
     for (const Interval& sx : solid) {
       // What of the ray in [z0, z1] loses material; remember where, for the axial depth.
+      const double keep = 1.0 - sx.f;
+      bool loses = false;
       for (const Interval& x : ray)
-        if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > 1.0 - sx.f + kSameShare)
+        if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > keep + kSameShare) {
           tile.cuts.push_back({std::max(x.z0, sx.z0), std::min(x.z1, sx.z1)});
+          loses = true;
+        }
+      // The ray as it was before this step's first change, for readers of the material after
+      // an earlier step of the batch.
+      if (loses && !logged) {
+        tile.before.push_back({index(i, j), s, tile.beforeIntervals.size(), ray.size()});
+        tile.beforeIntervals.insert(tile.beforeIntervals.end(), ray.begin(), ray.end());
+        logged = true;
+      }
       // The capture: what each of the ray's intervals the piece cuts loses, as cut() takes
       // it, summed into the column's cells of voxel height, with the first step to take some
       // (so that removed.vdb holds the removed volume, and in its place, exact to float
       // rounding). A log at a span's mean share would put a wall column's rest and the
       // material below it at one share, more than a voxel's material in some voxels.
-      const double keep = 1.0 - sx.f;
-      // The ray as it was before this step, for readers of the material after an earlier
-      // step of the batch (before its first change by this step).
-      if (!logged)
-        for (const Interval& x : ray)
-          if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > keep + kSameShare) {
-            tile.before.push_back({index(i, j), s, tile.beforeIntervals.size(), ray.size()});
-            tile.beforeIntervals.insert(tile.beforeIntervals.end(), ray.begin(), ray.end());
-            logged = true;
-            break;
-          }
       if (capture_) {
         for (const Interval& x : ray)
           if (x.z1 > sx.z0 && x.z0 < sx.z1 && x.f > keep + kSameShare) {
@@ -810,8 +810,6 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
 
   // The rays' earlier intervals, by ray and step (a tile logs its rays in step order; tiles
   // hold different rays).
-  for (const Before& b : before_)
-    changed_[b.ray] = false;
   before_.clear();
   beforeIntervals_.clear();
   for (Tile& tile : tiles) {
@@ -825,11 +823,8 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
   std::stable_sort(before_.begin(), before_.end(),
                    [](const Before& a, const Before& b) { return a.ray < b.ray; });
   beforeOf_.clear();
-  if (changed_.size() != rays_.size()) changed_.assign(rays_.size(), false);
-  for (std::size_t q = 0; q < before_.size(); ++q) {
+  for (std::size_t q = 0; q < before_.size(); ++q)
     beforeOf_.try_emplace(before_[q].ray, q);
-    changed_[before_[q].ray] = true;
-  }
 
   // Each step's sums, tile by tile; the loss columns its tiles started join lost_.
   std::vector<Removal> outs(steps.size());

@@ -182,7 +182,6 @@ class DexelStock : public Stock {
   std::vector<Before> before_;
   std::vector<Interval> beforeIntervals_;
   std::unordered_map<std::size_t, std::size_t> beforeOf_;  ///< a ray's first in before_
-  std::vector<bool> changed_;  ///< per ray: whether before_ holds it (a bit a ray)
   std::vector<double> stepMrr_;
 };
 

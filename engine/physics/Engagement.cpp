@@ -50,6 +50,13 @@ double pathOffset(const Eigen::Vector2d& p, const Eigen::Vector2d& feed,
   return away * ((p - centre).norm() - 1.0 / std::abs(curvature));
 }
 
+/// pathOffset of the point of the edge's circle (radius `radius` about the axis) at immersion
+/// angle phi.
+double edgeOffset(double radius, double phi, const Eigen::Vector2d& feed,
+                  const Eigen::Vector2d& side, double curvature) {
+  return pathOffset(radius * (std::sin(phi) * feed + std::cos(phi) * side), feed, side, curvature);
+}
+
 }  // namespace
 
 // One function: it runs for every cutting step, and its slices, angular samples, boundary
@@ -87,9 +94,13 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     s.kappa = std::atan2(1.0, slope);
     slices.push_back(s);
   }
+  // The edge's direction (from the axis) at immersion angle phi.
+  auto direction = [&](double phi) -> Eigen::Vector2d {
+    return std::sin(phi) * u + std::cos(phi) * v;
+  };
   // The point `out` outside the surface at slice s, angle phi.
   auto point = [&](const EdgeSlice& s, double phi, double offset) {
-    const Eigen::Vector2d e = std::sin(phi) * u + std::cos(phi) * v;
+    const Eigen::Vector2d e = direction(phi);
     const double reach = s.radius + offset * std::sin(s.kappa);
     return Eigen::Vector3d(tip.x() + reach * e.x(), tip.y() + reach * e.y(),
                            tip.z() + s.z - offset * std::cos(s.kappa));
@@ -97,10 +108,8 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
   std::vector<Eigen::Vector3d> points;
   points.reserve(slices.size() * (kAngleSamples + 1));
   std::array<Eigen::Vector2d, kAngleSamples + 1> sample;  // the samples' directions
-  for (int i = 0; i <= kAngleSamples; ++i) {
-    const double phi = kPi * i / kAngleSamples;
-    sample[static_cast<std::size_t>(i)] = std::sin(phi) * u + std::cos(phi) * v;
-  }
+  for (int i = 0; i <= kAngleSamples; ++i)
+    sample[static_cast<std::size_t>(i)] = direction(kPi * i / kAngleSamples);
   // The samples of every kSliceStride-th slice (and the last), then of the slice halfway
   // between two sampled ones where they differ: in their samples, or in radius or lead angle.
   // A slice between two that agree takes their samples (source) and later their contact: a
@@ -176,7 +185,7 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
   // A wall's point `offset` beyond the edge in the slice's own plane (the wall's trace there;
   // the distance from the edge's surface at least `offset` on a sloping side).
   auto wallPoint = [&](const EdgeSlice& s, double phi, double offset) {
-    const Eigen::Vector2d e = std::sin(phi) * u + std::cos(phi) * v;
+    const Eigen::Vector2d e = direction(phi);
     const double reach = s.radius + offset / std::max(std::sin(s.kappa), kSteepest);
     return Eigen::Vector3d(tip.x() + reach * e.x(), tip.y() + reach * e.y(), tip.z() + s.z);
   };
@@ -240,14 +249,14 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     // Sampled every 3 degrees within kReach of the first reading: of the changes of the same
     // sense (the contact's side below if it was below), the one nearest that reading (a thin
     // wall of stock beyond may hold a second change).
+    // The j-th wall sample about the first reading `at`.
+    auto sampleAngle = [](double at, int j) {
+      return std::clamp(at - kReach + 2.0 * kReach * j / kWallSamples, 0.0, kPi);
+    };
     points.clear();
-    for (const Edge& e : walls) {
-      const double at = 0.5 * (e.lo + e.hi);
+    for (const Edge& e : walls)
       for (int j = 0; j <= kWallSamples; ++j)
-        points.push_back(
-            wallPoint(slices[e.slice],
-                      std::clamp(at - kReach + 2.0 * kReach * j / kWallSamples, 0.0, kPi), offset));
-    }
+        points.push_back(wallPoint(slices[e.slice], sampleAngle(0.5 * (e.lo + e.hi), j), offset));
     const std::vector<std::uint8_t>& in = reader->read(points);
     std::vector<Edge> found;
     std::vector<std::size_t> of;
@@ -257,8 +266,7 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
       const std::uint8_t* row = in.data() + q * (kWallSamples + 1);
       double best = kNaN, bestLo = 0.0, bestHi = 0.0;
       for (int j = 0; j < kWallSamples; ++j) {
-        const double lo = std::clamp(at - kReach + 2.0 * kReach * j / kWallSamples, 0.0, kPi);
-        const double hi = std::clamp(at - kReach + 2.0 * kReach * (j + 1) / kWallSamples, 0.0, kPi);
+        const double lo = sampleAngle(at, j), hi = sampleAngle(at, j + 1);
         if ((row[j] != 0) != e.loIn || (row[j + 1] != 0) == e.loIn) continue;
         const double gap = std::abs(0.5 * (lo + hi) - at);
         if (std::isnan(best) || gap < best) {
@@ -299,15 +307,12 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
           ++found;
         }
       const double at = sum / found;
-      auto edgeOffset = [&](double phi) {
-        return pathOffset(r * (std::sin(phi) * u + std::cos(phi) * v), u, v, curvature);
-      };
-      if (found == 3 && hi - lo <= kParallel * h && at <= edgeOffset(0.0) &&
-          at >= edgeOffset(kPi)) {
+      auto offsetAt = [&](double phi) { return edgeOffset(r, phi, u, v, curvature); };
+      if (found == 3 && hi - lo <= kParallel * h && at <= offsetAt(0.0) && at >= offsetAt(kPi)) {
         double p0 = 0.0, p1 = kPi;  // the offset falls with phi
         for (int round = 0; round < 50; ++round) {
           const double mid = 0.5 * (p0 + p1);
-          (edgeOffset(mid) > at ? p0 : p1) = mid;
+          (offsetAt(mid) > at ? p0 : p1) = mid;
         }
         const double phi = 0.5 * (p0 + p1);
         if (std::abs(phi - boundary[i]) <= kReach) {
@@ -454,15 +459,12 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
 
 double radialDepth(const EdgeEngagement& e) {
   if (!e.any()) return kNaN;
-  auto offset = [&](double radius, double phi) {
-    return pathOffset(radius * (std::sin(phi) * e.feed + std::cos(phi) * e.side), e.feed, e.side,
-                      e.curvature);
-  };
   double widest = 0.0;
   for (const EdgeSlice& s : e.slices) {
     double sum = 0.0;
     for (const auto& a : s.arcs)
-      sum += std::abs(offset(s.radius, a[0]) - offset(s.radius, a[1]));
+      sum += std::abs(edgeOffset(s.radius, a[0], e.feed, e.side, e.curvature) -
+                      edgeOffset(s.radius, a[1], e.feed, e.side, e.curvature));
     widest = std::max(widest, sum);
   }
   return widest;

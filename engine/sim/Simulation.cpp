@@ -246,6 +246,7 @@ bool retractsFromCut(const std::vector<Planned>& plan, const Toolpath& path, std
 /// horizontal motion (a plunge). The spindle's direction from the move, else `spindleRpm`
 /// (clockwise when neither says).
 struct StepContact {
+  bool cutting = false;  ///< not a rapid, and removed more than air's rounding
   EdgeEngagement edge;
   double horizontal = 0.0;  ///< the horizontal share of the step's direction at its end
   double rpm = 0.0;         ///< the spindle speed the step runs at (0: stopped or unknown)
@@ -256,7 +257,8 @@ StepContact measureContact(const Move& m, const StepPath& sp, const Removal& rem
                            std::size_t afterStep) {
   StepContact c;
   const double h = stock.resolution();
-  if (m.kind == MoveKind::Rapid || !(rem.volume > kAirVoxels * h * h * h)) return c;
+  c.cutting = m.kind != MoveKind::Rapid && rem.volume > kAirVoxels * h * h * h;
+  if (!c.cutting) return c;
   // The direction at the step's end, and how much of it is horizontal.
   const Eigen::Vector3d d = sp.end - sp.at(std::max(0.0, 1.0 - 1e-3));
   c.horizontal = d.norm() > 0.0 ? d.head<2>().norm() / d.norm() : 0.0;
@@ -268,13 +270,12 @@ StepContact measureContact(const Move& m, const StepPath& sp, const Removal& rem
 }
 
 /// The load of one step (engine/physics) at its programmed feed, from its contact.
-StepLoad stepLoad(const PhysicsOptions& o, const Move& m, const StepRecord& r, const StepContact& c,
-                  const AptCutter& cutter, const Stock& stock, SimulationResult& out) {
+StepLoad stepLoad(const PhysicsOptions& o, const StepRecord& r, const StepContact& c,
+                  const AptCutter& cutter, SimulationResult& out) {
   StepLoad load;
   load.exponent = o.material.exponent();
   load.entry = load.exit = kNaN;
-  const double h = stock.resolution();
-  if (m.kind == MoveKind::Rapid || !(r.removed > kAirVoxels * h * h * h)) return load;
+  if (!c.cutting) return load;
   if (c.horizontal < 1e-3 || c.rpm == 0.0) {
     ++(c.horizontal < 1e-3 ? out.plungeSteps : out.stoppedSteps);
     return unmodelledLoad();
@@ -504,7 +505,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
         r.width = radialDepth(contact.edge);
         r.depth = axialDepth(contact.edge);
         r.engagementRad = contact.edge.exit - contact.edge.entry;
-      } else if (r.removed > kAirVoxels * h * h * h && m.kind != MoveKind::Rapid) {
+      } else if (contact.cutting) {
         r.depth = rem.axialDepth;
         r.width = contact.horizontal < 1e-3 ? 2.0 * cutter.radiusAt(r.depth) : 0.0;
       }
@@ -517,12 +518,11 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       if (r.curvature != 0.0 && r.removed > kAirVoxels * h * h * h)
         r.side = r.curvature * rem.lateral < 0.0 ? PathSide::Concave : PathSide::Convex;
 
-      if (options.physics)
-        out.loads.push_back(stepLoad(*options.physics, m, r, contact, cutter, stock, out));
+      if (options.physics) out.loads.push_back(stepLoad(*options.physics, r, contact, cutter, out));
 
       // The analytic model of this step: its stepover and depth (given or measured).
       r.mrrExact = r.mrrPaper = 0.0;
-      if (m.kind != MoveKind::Rapid && r.removed > kAirVoxels * h * h * h)
+      if (contact.cutting)
         analytic(r, cutter, sp,
                  options.stepover.value_or(std::min(r.width, 2.0 * cutter.maxRadius())),
                  std::min(options.depth.value_or(r.depth), cutter.height()));

@@ -7,6 +7,7 @@
 #include "engine/gcode/GcodeReader.h"
 #include "stock/DexelStock.h"
 #include "stock/VoxelStock.h"
+#include "tests/stock/StockTestSupport.h"
 
 #include <catch2/catch.hpp>
 
@@ -140,11 +141,7 @@ TEST_CASE("arcs read their true stepover: the width and the analytic model witho
           b.min = {-60, -60, -10};
           b.max = {60, 60, 0};
           const double h = 2 * r / 20;
-          std::unique_ptr<Stock> stock;
-          if (std::string(model) == "voxel")
-            stock = std::make_unique<VoxelStock>(VoxelStock::box(b, h));
-          else
-            stock = std::make_unique<DexelStock>(DexelStock::box(b, h));
+          std::unique_ptr<Stock> stock = test::boxStock(model, b, h);
           SimulationOptions o;
           const SimulationResult res = simulate(path, cutter, *stock, o);
           const double centroid = concave ? k.rho + r - 0.5 * k.s : k.rho - r + 0.5 * k.s;
