@@ -297,6 +297,32 @@ double AptCutter::radiusAt(double z) const {
   return profile_.front().end.x();
 }
 
+double AptCutter::maxRadiusBelow(double z) const {
+  if (z >= p_.height) return maxRadius_;
+  z = std::max(z, 0.0);
+  double widest = 0.0;
+  for (const ProfileSegment& s : profile_) {
+    const double z0 = std::min(s.start.y(), s.end.y());
+    const double z1 = std::min(std::max(s.start.y(), s.end.y()), z);
+    if (z0 > z1) continue;  // the piece lies above z
+    if (s.kind == ProfileSegment::Kind::Line) {
+      // The line's radius at its ends within [z0, z1] (at z0 alone where it is horizontal).
+      for (double at : {z0, z1}) {
+        const double dz = s.end.y() - s.start.y();
+        widest = std::max(
+            widest, dz == 0.0 ? std::max(s.start.x(), s.end.x())
+                              : s.start.x() + (at - s.start.y()) * (s.end.x() - s.start.x()) / dz);
+      }
+    } else {
+      // An arc bulges outward (as radiusAt reads it): widest at the height nearest its centre's.
+      const double dz = std::clamp(s.center.y(), z0, z1) - s.center.y();
+      widest =
+          std::max(widest, s.center.x() + std::sqrt(std::max(0.0, s.radius * s.radius - dz * dz)));
+    }
+  }
+  return widest;
+}
+
 double AptCutter::profileSignedDistance(double rho, double z) const {
   if (roundedBox_) {
     // Flat, ball and bull cutters: the profile mirrored about the axis is a box of half-size

@@ -108,6 +108,9 @@ class AptCutter {
   double height() const { return p_.height; }
   /// Largest silhouette radius over [0, h], mm.
   double maxRadius() const { return maxRadius_; }
+  /// Largest silhouette radius over [0, min(z, h)], mm: how far from its axis the part of the
+  /// cutter within z of its tip reaches (the bottom's radius for z <= 0).
+  double maxRadiusBelow(double zMm) const;
 
   /// Silhouette radius W(z) at height z above the tip, mm; 0 outside [0, h].
   double radiusAt(double zMm) const;

@@ -150,7 +150,7 @@ Eigen::Vector2d StepPath::feedDirectionAtEnd() const {
   return u.norm() < 1e-12 ? Eigen::Vector2d(1.0, 0.0) : Eigen::Vector2d(u.normalized());
 }
 
-Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
+Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, double ceiling)
     : cutter_(cutter), path_(path) {
   if (!(resolution > 0.0)) throw ParameterError("sweep resolution must be positive");
   if (path_.kind == StepPath::Kind::Polyline && path_.points.size() < 2)
@@ -218,9 +218,11 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution)
     lo = lo.cwiseMin(e);
     hi = hi.cwiseMax(e);
   }
-  const double w = cutter_.maxRadius();
+  // Below the ceiling every tip position holds at most the cutter's ceiling - zLow_ lowest.
+  const double w = cutter_.maxRadiusBelow(ceiling - zLow_);
   bounds_.min = lo - Eigen::Vector3d(w, w, 0.0);
   bounds_.max = hi + Eigen::Vector3d(w, w, cutter_.height());
+  bounds_.max.z() = std::max(bounds_.min.z(), std::min(bounds_.max.z(), ceiling));
   if (!flat_ && !convexLine_) {
     const double spacing = resolution / 2.0;
     const int n = std::max(2, static_cast<int>(std::ceil(length / spacing)) + 1);

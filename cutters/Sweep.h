@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include <limits>
 #include <vector>
 
 namespace engage {
@@ -53,7 +54,11 @@ struct Parallelogram {
 class Sweep {
  public:
   /// `resolution` (mm, e.g. the voxel size) sets the sampling of steps that change height.
-  Sweep(const AptCutter& cutter, const StepPath& path, double resolution);
+  /// `ceiling` (mm): no material lies above this height (the stock's top), so bounds() need
+  /// only hold the part of the swept solid below it: a V-bit engraving 0.07 mm deep is asked
+  /// about the 0.08 mm it engages, not its whole diameter.
+  Sweep(const AptCutter& cutter, const StepPath& path, double resolution,
+        double ceiling = std::numeric_limits<double>::infinity());
 
   /// Signed distance from a world point to the swept solid, mm (negative inside). With
   /// `gradient`, also its gradient there (unit length up to round-off): the cutter's at the
@@ -84,7 +89,7 @@ class Sweep {
   /// signedDistance where `count` is 1, zero otherwise.
   double localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3d normals[2],
                     double distances[2], int& count, Eigen::Matrix3d* curvature = nullptr) const;
-  /// World bounding box of the swept solid, mm.
+  /// World bounding box of the swept solid below the ceiling, mm.
   Box3 bounds() const { return bounds_; }
   const StepPath& path() const { return path_; }
   /// Whether the swept solid is convex: a straight step of a convex cutter (its sides do not

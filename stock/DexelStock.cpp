@@ -286,17 +286,27 @@ double DexelStock::volume() const {
 }
 
 Box3 DexelStock::bounds() const {
-  Box3 b;
-  b.min = Eigen::Vector3d::Constant(1e300);
-  b.max = Eigen::Vector3d::Constant(-1e300);
+  // Columns and heights first, positions at the end (one pass over every ray).
+  int i0 = nx_, i1 = -1, j0 = ny_, j1 = -1;
+  double z0 = 1e300, z1 = -1e300;
   for (int j = 0; j < ny_; ++j)
     for (int i = 0; i < nx_; ++i) {
       const auto& r = rays_[index(i, j)];
       if (r.empty()) continue;
-      b.min = b.min.cwiseMin(Eigen::Vector3d(x0_ + i * h_, y0_ + j * h_, r.front().z0));
-      b.max = b.max.cwiseMax(Eigen::Vector3d(x0_ + (i + 1) * h_, y0_ + (j + 1) * h_, r.back().z1));
+      i0 = std::min(i0, i);
+      i1 = std::max(i1, i);
+      j0 = std::min(j0, j);
+      j1 = std::max(j1, j);
+      z0 = std::min(z0, r.front().z0);
+      z1 = std::max(z1, r.back().z1);
     }
-  if (b.min.x() > b.max.x()) b.min = b.max = Eigen::Vector3d::Zero();
+  Box3 b;
+  if (i1 < 0) {
+    b.min = b.max = Eigen::Vector3d::Zero();
+    return b;
+  }
+  b.min = Eigen::Vector3d(x0_ + i0 * h_, y0_ + j0 * h_, z0);
+  b.max = Eigen::Vector3d(x0_ + (i1 + 1) * h_, y0_ + (j1 + 1) * h_, z1);
   return b;
 }
 

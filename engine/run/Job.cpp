@@ -588,10 +588,6 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   }
   chooseCutters(job, library, single, project ? 1 : 0);
   toolPartOptions(job, values, single, sys);
-  const std::string voxel = text("voxel");
-  job.voxel = voxel.empty() ? 2.0 * job.cutter.radius() / 20.0
-                            : parseQuantity(voxel, Dimension::Length, sys, "--voxel").value;
-  if (!(job.voxel > 0.0)) throw ParameterError("--voxel must be positive");
   const std::string step = text("step");
   SimulationOptions& so = job.simulation;
   so.stepLength = step.empty() ? 0.0 : parseQuantity(step, Dimension::Length, sys, "--step").value;
@@ -603,6 +599,15 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   if (job.scheduling()) job.schedule = scheduleOptions(values, sys, job);
   so.physics = physicsOptions(values, sys);
   stockOptions(job, values, project, sys);
+  // The cell follows the narrowest engagement at the program's depths (Resolution.h).
+  const std::string voxel = text("voxel");
+  job.voxelGiven = !voxel.empty();
+  const StockModels models{job.stockModel == StockModel::Voxel || job.crossCheck,
+                           job.stockModel == StockModel::Dexel || job.crossCheck};
+  job.cellChoice = defaultCell(job.path, job.cutters, job.stock.box, models, so.stepLength);
+  job.voxel = job.voxelGiven ? parseQuantity(voxel, Dimension::Length, sys, "--voxel").value
+                             : job.cellChoice.cell;
+  if (!(job.voxel > 0.0)) throw ParameterError("--voxel must be positive");
   outputOptions(job, values);
   job.progressLabel = commandName(command);
   return job;

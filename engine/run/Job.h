@@ -10,6 +10,7 @@
 #include "engine/gcode/Toolpath.h"
 #include "engine/run/CutterOptions.h"
 #include "engine/run/OptionTable.h"
+#include "engine/run/Resolution.h"
 #include "engine/schedule/FeedScheduler.h"
 #include "engine/sim/Simulation.h"
 #include "engine/tools/ToolLibrary.h"
@@ -45,8 +46,7 @@ struct Job {
   /// A CAMotics project's programs, run one after the other; empty for a program.
   std::vector<std::string> projectFiles;
   std::string toolText;  ///< the --tool value, as typed (summary.json)
-  /// The single cutter (--tool), or with --tools the program's tool of the smallest radius
-  /// (the default voxel and step follow it).
+  /// The single cutter (--tool), or with --tools the program's tool of the smallest radius.
   AptCutter cutter = AptCutter::flat(1.0, 1.0);
   std::string toolsFile;       ///< --tools, as given ("" for none)
   std::string toolsFormat;     ///< its format: linuxcnc, fusion360, freecad, camotics
@@ -61,10 +61,14 @@ struct Job {
   StockModel stockModel = StockModel::Dexel;
   UnitSystem units = UnitSystem::Metric;  ///< of the reports (and of bare numbers)
   double voxel = 0.0;                     ///< voxel size or dexel ray spacing, mm
-  SimulationOptions simulation;           ///< step length, stepover, depth (no progress)
-  bool crossCheck = false;                ///< also run the other stock model
-  double crossTolerance = 0.03;           ///< relative per-step difference it allows
-  ScheduleOptions schedule;               ///< used by schedule jobs
+  /// The engagement the cell follows (for the coarse-cell warning whatever set the cell) and,
+  /// without --voxel, what set it (engine/run/Resolution.h).
+  CellChoice cellChoice;
+  bool voxelGiven = false;       ///< --voxel was given
+  SimulationOptions simulation;  ///< step length, stepover, depth (no progress)
+  bool crossCheck = false;       ///< also run the other stock model
+  double crossTolerance = 0.03;  ///< relative per-step difference it allows
+  ScheduleOptions schedule;      ///< used by schedule jobs
   /// Without a stock: the stock is on the right of the path (climb with M3) or on the left.
   bool materialOnRight = true;
   std::string materialSide;  ///< as typed ("" = default right)

@@ -85,7 +85,8 @@ std::vector<OptionInfo> makeTable() {
       choice("stock-model", G::Stock, {"voxel", "dexel"}, "dexel",
              "dexel (vertical rays, the default) or voxel (volume fractions)"),
       quantity("voxel", G::Simulation, D::Length,
-               "dexel ray spacing or voxel size (default: cutter diameter / 20)"),
+               "dexel ray spacing or voxel size (default: a twentieth of the diameter the "
+               "tools engage at the program's depths)"),
       quantity("step", G::Simulation, D::Length, "longest step (default: 2.5 x --voxel)"),
       quantity("stepover", G::Simulation, D::Length,
                "stepover for the analytic model (default: measured width)"),

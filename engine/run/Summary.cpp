@@ -288,6 +288,7 @@ std::string summaryJson(const RunResult& result) {
   j["tools"] = toolsJson(result);
   j["stock"] = job.stock.text;
   j["voxel"] = toDisplay(job.voxel, Dimension::Length, sys);
+  j["cell_reason"] = job.voxelGiven ? std::string("--voxel") : describeCell(job.cellChoice, sys);
   j["step_length"] = toDisplay(job.stepLength(), Dimension::Length, sys);
   j["moves"] = job.path.moves.size();
   j["steps"] = r.steps.size();
@@ -355,12 +356,16 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
   auto length = [&](double v) { return formatQuantity(v, Dimension::Length, job.units); };
   std::vector<std::string> w;
   // Where the answer cannot be trusted: a grid too coarse for the tool or the stock.
-  const double diameter = 2.0 * job.cutter.radius();
-  if (result.stock && diameter / job.voxel < 5.0)
-    w.push_back("the voxel (" + length(job.voxel) + ") is coarse for a " + length(diameter) +
-                " tool, fewer than 5 across it: volumes may be off by several percent (the "
-                "default is D/20 = " +
-                length(diameter / 20.0) + ")");
+  // The diameter the narrowest-cutting tool engages at the program's depths (Resolution.h).
+  const ProgramEngagement& e = job.cellChoice.engagement;
+  if (result.stock && e.engaged / job.voxel < 5.0)
+    w.push_back("the cell (" + length(job.voxel) + ") is coarse for the " + length(e.engaged) +
+                (e.known && e.engaged < e.nominal
+                     ? " the " + length(e.nominal) + " tool engages at " + length(e.depth) + " deep"
+                     : " tool") +
+                ", fewer than 5 cells across it: volumes may be off by several percent (a "
+                "twentieth is " +
+                length(e.engaged / 20.0) + ")");
   if (result.stock) {
     const Box3 b = result.stock->bounds();
     const double smallest = (b.max - b.min).minCoeff();
@@ -443,6 +448,8 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
   appendf(report, "%zu moves, %zu steps in %.2f s (%.0f steps/s)\n", job.path.moves.size(),
           r.steps.size(), r.seconds,
           r.seconds > 0 ? static_cast<double>(r.steps.size()) / r.seconds : 0.0);
+  if (result.stock && !job.voxelGiven)
+    appendf(report, "cell %s\n", describeCell(job.cellChoice, sys).c_str());
   if (!result.stock)
     appendf(report,
             "no stock: every feed step cut at stepover %s and depth %s, the stock on the %s of "

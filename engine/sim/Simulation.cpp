@@ -454,7 +454,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       const AptCutter& cutter = cutters.of(m.tool);
       StepCut c{nullptr, static_cast<int>(si), b.r.dt, {}};
       if (!retractsFromCut(plan, path, si, b.sp, cutter, stockTop)) {  // (else removes nothing)
-        c.sweep = &sweeps.emplace_back(cutter, b.sp, h);
+        c.sweep = &sweeps.emplace_back(cutter, b.sp, h, stockTop);
         const Box3 box = c.sweep->bounds();
         columns +=
             ((box.max.x() - box.min.x()) / h + 1.0) * ((box.max.y() - box.min.y()) / h + 1.0);

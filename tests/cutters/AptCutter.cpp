@@ -24,6 +24,16 @@ double deg(double d) {
 // Closed-form values below are exact to double round-off; 1e-12 mm is that round-off for
 // lengths of order 10 mm (a few ulp after trigonometry).
 constexpr double kExact = 1e-12;
+/// A general APT cutter: delta 10 deg, r_tc 2, r 5 (e 3), h 20.
+AptCutter generalApt() {
+  AptParameters p;
+  p.radius = 5.0;
+  p.cornerRadius = 2.0;
+  p.cornerCenterRadial = 3.0;
+  p.bottomAngleRad = deg(10.0);
+  p.height = 20.0;
+  return AptCutter::fromApt(p);
+}
 }  // namespace
 
 TEST_CASE("named cutters set the APT parameters of paper Fig 3", "[cutters]") {
@@ -93,13 +103,7 @@ TEST_CASE("silhouette radius W(z) of every named cutter", "[cutters]") {
     CHECK(c.radiusAt(7.0) == Approx(5.0).margin(kExact));
   }
   SECTION("general APT: delta 10 deg, r_tc 2, r 5 (e 3)") {
-    AptParameters p;
-    p.radius = 5.0;
-    p.cornerRadius = 2.0;
-    p.cornerCenterRadial = 3.0;
-    p.bottomAngleRad = deg(10.0);
-    p.height = 20.0;
-    const AptCutter c = AptCutter::fromApt(p);
+    const AptCutter c = generalApt();
     // h_tc = (r_tc + e sin delta) / cos delta = (2 + 3 sin 10) / cos 10.
     const double htc = (2.0 + 3.0 * std::sin(deg(10.0))) / std::cos(deg(10.0));
     CHECK(c.parameters().cornerCenterHeight == Approx(htc).margin(kExact));
@@ -107,6 +111,45 @@ TEST_CASE("silhouette radius W(z) of every named cutter", "[cutters]") {
     CHECK(c.radiusAt(0.3) == Approx(0.3 / std::tan(deg(10.0))).margin(kExact));
     const double z = htc;  // corner equator
     CHECK(c.radiusAt(z) == Approx(5.0).margin(kExact));
+  }
+}
+
+TEST_CASE("the widest the cutter reaches within a height of its tip", "[cutters]") {
+  // Closed forms of the profiles above: the widest point below z is W(z) where the profile
+  // widens upward all the way (every named cutter), the bottom's radius at z <= 0.
+  SECTION("flat D 10: 5 at any height") {
+    const AptCutter c = AptCutter::flat(10.0, 20.0);
+    CHECK(c.maxRadiusBelow(-1.0) == Approx(5.0).margin(kExact));
+    CHECK(c.maxRadiusBelow(0.0) == Approx(5.0).margin(kExact));
+    CHECK(c.maxRadiusBelow(3.0) == Approx(5.0).margin(kExact));
+  }
+  SECTION("ball D 10: sqrt(10 z - z^2) below the equator") {
+    const AptCutter c = AptCutter::ball(10.0, 20.0);
+    CHECK(c.maxRadiusBelow(0.0) == Approx(0.0).margin(kExact));
+    CHECK(c.maxRadiusBelow(0.1) == Approx(std::sqrt(1.0 - 0.01)).margin(kExact));
+    CHECK(c.maxRadiusBelow(1.0) == Approx(3.0).margin(kExact));
+    CHECK(c.maxRadiusBelow(9.0) == Approx(5.0).margin(kExact));
+  }
+  SECTION("bull D 10, r_tc 2: 3 + sqrt(4 - (z - 2)^2) on the corner") {
+    const AptCutter c = AptCutter::bull(10.0, 2.0, 20.0);
+    CHECK(c.maxRadiusBelow(0.0) == Approx(3.0).margin(kExact));
+    CHECK(c.maxRadiusBelow(0.5) == Approx(3.0 + std::sqrt(4.0 - 2.25)).margin(kExact));
+    CHECK(c.maxRadiusBelow(4.0) == Approx(5.0).margin(kExact));
+  }
+  SECTION("60 deg V-bit D 3.175: z tan 30 up to its full radius") {
+    const AptCutter c = AptCutter::chamfer(3.175, deg(60.0), 10.0);
+    CHECK(c.maxRadiusBelow(0.07) == Approx(0.07 * std::tan(deg(30.0))).margin(kExact));
+    CHECK(c.maxRadiusBelow(5.0) == Approx(1.5875).margin(kExact));
+    CHECK(c.maxRadiusBelow(25.0) == Approx(c.maxRadius()).margin(kExact));
+  }
+  SECTION("taper tip D 2, beta 10 deg: 1 + z tan 10") {
+    const AptCutter c = AptCutter::taper(2.0, deg(10.0), 20.0);
+    CHECK(c.maxRadiusBelow(0.3) == Approx(1.0 + 0.3 * std::tan(deg(10.0))).margin(kExact));
+  }
+  SECTION("general APT, delta 10 deg, r_tc 2, e 3: the corner's equator is the widest") {
+    const AptCutter c = generalApt();
+    CHECK(c.maxRadiusBelow(0.3) == Approx(0.3 / std::tan(deg(10.0))).margin(kExact));
+    CHECK(c.maxRadiusBelow(c.parameters().cornerCenterHeight + 1.0) == Approx(5.0).margin(kExact));
   }
 }
 

@@ -180,8 +180,11 @@ TEST_CASE("makeJob gives each tool of a program its cutter, or says which one it
   REQUIRE(job.cutters.byTool.size() == 4);  // T1-T3 and tool 0, before the first change
   CHECK(job.cutters.of(2).shape() == CutterShape::Ball);
   CHECK(job.startTool == 1);
-  // The smallest cutter sets the default voxel, D/20: T2's 4 mm.
-  CHECK(job.voxel == Approx(0.2).margin(1e-12));
+  // The narrowest engagement sets the default cell, a twentieth of it: T3's 90 deg V-bit 1 mm
+  // deep engages 2 mm (T2's 4 mm ball 1 mm deep 2 sqrt(3) = 3.46 mm, T1's 6 mm flat 6 mm).
+  CHECK(job.voxel == Approx(0.1).margin(1e-12));
+  CHECK(job.cellChoice.engagement.tool == 3);
+  CHECK(job.cellChoice.limit == CellLimit::Engaged);
   CHECK(job.tools.at(3).origin == tools + "three_tools.tbl:3");
 
   test::TempFolder dir("job_tools");

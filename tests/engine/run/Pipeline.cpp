@@ -144,7 +144,15 @@ TEST_CASE("warnings where the answer cannot be trusted", "[run]") {
   CHECK(warningsOf(test::slotProgram(), {}).empty());
   // 6 mm tool, 1.5 mm voxels: 4 across it.
   CHECK_THAT(warningsOf(test::slotProgram(), {{"voxel", "1.5"}}),
-             Contains("fewer than 5 across it"));
+             Contains("fewer than 5 cells across it"));
+  // A 60 deg V-bit 0.07 mm deep engages 2 x 0.07 tan 30 = 0.081 mm: a cell of 0.159 mm (D/20
+  // of its 3.175 mm) is coarse for it.
+  CHECK_THAT(warningsOf("G21 G90\nG0 X0 Y0 Z1\nG1 Z-0.07 F100\nG1 X30 F600\nG0 Z1\nM2\n",
+                        {{"tool", "chamfer"},
+                         {"diameter", "3.175mm"},
+                         {"tip-angle", "60deg"},
+                         {"voxel", "0.159"}}),
+             Contains("coarse for the 0.080829 mm the 3.175 mm tool engages at 0.07 mm deep"));
   // The path passes 1 mm above the stock: it reaches the box's bounds but cuts nothing.
   CHECK_THAT(warningsOf("G21 G90\nG0 X0 Y0 Z1\nG1 X30 F600\nM2\n", {}),
              Contains("removed no material"));

@@ -1,0 +1,141 @@
+#include "engine/run/Resolution.h"
+
+#include "stock/DexelStock.h"
+#include "stock/VoxelStock.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <utility>
+#include <vector>
+
+namespace engage {
+
+namespace {
+
+/// The lowest tip height over a move, mm (lines and helices at an end; splines at a point).
+double lowestZ(const Move& m) {
+  double z = std::min(m.start.z(), m.end.z());
+  for (const Eigen::Vector3d& p : m.points)
+    z = std::min(z, p.z());
+  return z;
+}
+
+/// The median of (value, weight) pairs, weighted.
+double weightedMedian(std::vector<std::pair<double, double>> v) {
+  std::sort(v.begin(), v.end());
+  double total = 0.0;
+  for (const auto& [value, weight] : v)
+    total += weight;
+  double sum = 0.0;
+  for (const auto& [value, weight] : v)
+    if ((sum += weight) >= 0.5 * total) return value;
+  return v.back().first;
+}
+
+double stepsAt(const Toolpath& path, double step) {
+  double steps = 0.0;
+  for (const Move& m : path.moves) {
+    const double len = moveLength(m);
+    if (len > 0.0) steps += std::max(1.0, std::ceil(len / step - 1e-9));
+  }
+  return steps;
+}
+
+}  // namespace
+
+ProgramEngagement programEngagement(const Toolpath& path, const CutterSet& cutters,
+                                    std::optional<double> stockTop) {
+  std::map<int, std::vector<std::pair<double, double>>> depths;  // tool -> (depth, length)
+  if (stockTop)
+    for (const Move& m : path.moves) {
+      if (m.kind == MoveKind::Rapid) continue;
+      const double depth = *stockTop - lowestZ(m);
+      const double len = moveLength(m);
+      if (depth > 0.0 && len > 0.0) depths[m.tool].emplace_back(depth, len);
+    }
+  ProgramEngagement best;
+  for (const auto& [tool, list] : depths) {
+    const AptCutter& c = cutters.of(tool);
+    ProgramEngagement e;
+    e.tool = cutters.byTool.count(tool) ? tool : -1;
+    e.nominal = 2.0 * c.radius();
+    e.depth = weightedMedian(list);
+    e.engaged = 2.0 * c.maxRadiusBelow(e.depth);
+    e.known = true;
+    if (!best.known || e.engaged < best.engaged) best = e;
+  }
+  if (best.known) return best;
+  // No cut below the top: the smallest cutter, nominal.
+  best.nominal = 2.0 * cutters.smallestRadius();
+  best.tool = -1;
+  for (const auto& [tool, c] : cutters.byTool)
+    if (2.0 * c.radius() == best.nominal) {
+      best.tool = tool;
+      break;
+    }
+  best.engaged = best.nominal;
+  return best;
+}
+
+CellChoice defaultCell(const Toolpath& path, const CutterSet& cutters,
+                       const std::optional<Box3>& box, StockModels models, double fixedStep) {
+  CellChoice choice;
+  choice.engagement =
+      programEngagement(path, cutters, box ? std::optional<double>(box->max.z()) : std::nullopt);
+  const ProgramEngagement& e = choice.engagement;
+  const double nominal = e.nominal / 20.0;
+  const double fine = std::min(nominal, e.engaged / 20.0);
+  choice.limit = e.known && fine < nominal ? CellLimit::Engaged : CellLimit::Nominal;
+  choice.cell = choice.limit == CellLimit::Engaged ? fine : nominal;
+  if (choice.limit == CellLimit::Nominal) return choice;
+  // Coarser only as far as the budgets need: each bound shrinks as the cell grows.
+  auto memory = [&](double h) {
+    if (!box) return 0.0;
+    return (models.voxel ? VoxelStock::memoryBound(*box, h) : 0.0) +
+           (models.dexel ? DexelStock::memoryBound(*box, h) : 0.0);
+  };
+  auto steps = [&](double h) { return fixedStep > 0.0 ? 0.0 : stepsAt(path, 2.5 * h); };
+  auto fits = [&](double h) { return memory(h) <= kStockBudgetBytes && steps(h) <= kStepBudget; };
+  if (fits(fine)) return choice;
+  double lo = fine, hi = nominal;  // lo does not fit; the cell is the smallest that does
+  if (!fits(hi)) {
+    choice.cell = nominal;
+    choice.limit = memory(fine) > kStockBudgetBytes ? CellLimit::Memory : CellLimit::Steps;
+    return choice;
+  }
+  for (int i = 0; i < 40; ++i) {
+    const double mid = std::sqrt(lo * hi);
+    (fits(mid) ? hi : lo) = mid;
+  }
+  choice.cell = hi;
+  choice.limit = memory(lo) > kStockBudgetBytes ? CellLimit::Memory : CellLimit::Steps;
+  return choice;
+}
+
+std::string describeCell(const CellChoice& choice, UnitSystem units) {
+  auto length = [&](double v) { return formatQuantity(v, Dimension::Length, units); };
+  const ProgramEngagement& e = choice.engagement;
+  const std::string tool = e.tool < 0 ? "the tool" : "tool " + std::to_string(e.tool);
+  const std::string engaged = "the " + length(e.engaged) + " " + tool + " engages at " +
+                              length(e.depth) + " deep (nominal " + length(e.nominal) + ")";
+  switch (choice.limit) {
+    case CellLimit::Engaged:
+      return length(choice.cell) + ": a twentieth of " + engaged;
+    case CellLimit::Memory:
+      return length(choice.cell) + ": the finest whose stock fits 2 GB; a twentieth of " + engaged +
+             " would be " + length(e.engaged / 20.0);
+    case CellLimit::Steps:
+      return length(choice.cell) + ": the finest that keeps the run within 1000000 steps; a " +
+             "twentieth of " + engaged + " would be " + length(e.engaged / 20.0);
+    case CellLimit::Nominal:
+      break;
+  }
+  if (e.known)
+    return length(choice.cell) + ": a twentieth of the " + length(e.nominal) + " diameter of " +
+           tool + " (it engages all of it at the program's depths)";
+  return length(choice.cell) + ": a twentieth of the " + length(e.nominal) + " diameter of " +
+         tool + " (no cut below the stock's top known before the run)";
+}
+
+}  // namespace engage
