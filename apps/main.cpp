@@ -15,6 +15,7 @@
 #include "apps/SimulateCommand.h"
 #include "cutters/Error.h"
 #include "engine/paths/DataDirectory.h"
+#include "engine/schedule/FeedScheduler.h"
 #include "engine/sim/Simulation.h"
 
 #include <CLI/CLI.hpp>
@@ -92,7 +93,8 @@ std::string versionText() {
 constexpr const char* kExitStatuses =
     "Exit status: 0 success; 1 invalid input (one line on stderr, nothing written); 2 usage; "
     "3 internal error; 4 a batch ran but some of its jobs failed; 5 the run completed but a "
-    "rapid, a shank or a holder met material; 130 interrupted.\n";
+    "rapid, a shank or a holder met material; 6 a schedule's limit cannot be met at the lowest "
+    "feed (nothing written); 130 interrupted.\n";
 
 }  // namespace
 
@@ -130,6 +132,9 @@ int main(int argc, char** argv) {
   } catch (const engage::Interrupted&) {
     std::cerr << "engage: interrupted: the run stopped and removed what it had made\n";
     return 130;
+  } catch (const engage::UnmetLimitError& e) {
+    std::cerr << "engage: error: " << e.what() << '\n';
+    return 6;
   } catch (const engage::Error& e) {
     std::cerr << "engage: error: " << e.what() << '\n';
     return 1;

@@ -126,6 +126,7 @@ ScheduleOptions scheduleOptions(const OptionValues& values, UnitSystem sys, cons
       throw ParameterError("--target-mrr must be positive (or auto), found '" + target + "'");
   }
   s.feedMin = quantity("feed-min", Dimension::Feed);
+  s.allowUnmet = text("allow-unmet") == "true";
   s.feedMax = quantity("feed-max", Dimension::Feed);
   s.airFeed = quantity("air-feed", Dimension::Feed);
   s.acceleration = quantity("accel", Dimension::Acceleration);

@@ -136,7 +136,13 @@ std::vector<OptionInfo> makeTable() {
       scheduleOnly(plain("target-mrr", K::Text, G::Schedule, "auto",
                          "target MRR, e.g. 18000mm3/min, or auto")),
       scheduleOnly(quantity("feed-min", G::Schedule, D::Feed,
-                            "lowest feed to command (default: 1 mm/min, or --feed-max if lower)")),
+                            "lowest feed to command (default: a tenth of each move's programmed "
+                            "feed, or --feed-max if lower)")),
+      scheduleOnly(
+          plain("allow-unmet", K::Flag, G::Schedule, "",
+                "write the re-fed program even where a load limit (--max-chip, --max-force, "
+                "--max-torque, --max-power) holds only below the lowest feed (otherwise "
+                "refused, exit status 6)")),
       scheduleOnly(quantity("feed-max", G::Schedule, D::Feed,
                             "highest feed to command (default: twice the programmed)")),
       scheduleOnly(quantity("air-feed", G::Schedule, D::Feed,

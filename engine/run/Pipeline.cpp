@@ -1,5 +1,7 @@
 #include "engine/run/Pipeline.h"
 
+#include "engine/run/Summary.h"
+
 #include "cutters/Error.h"
 #include "engine/gcode/GcodeWriter.h"
 #include "engine/run/Output.h"
@@ -142,6 +144,10 @@ RunResult executeRun(PreparedRun run, const ProgressFunction& progress) {
   }
   if (job.scheduling()) {
     r.plan = scheduleFeeds(job.path, r.sim, job.schedule);
+    if (!r.plan.unmet.empty() && !job.schedule.allowUnmet)
+      throw UnmetLimitError(unmetLimits(r) +
+                            " (the lowest feed: --feed-min, else a tenth of the programmed); "
+                            "give --allow-unmet to write the program anyway");
     r.refed = writeProgram(readFile(job.mainProgram()), job.path, r.plan.plan);
   }
   // The first step at the peak: a later one counts as higher only beyond rounding (a slot's

@@ -351,6 +351,47 @@ std::string summaryJson(const RunResult& result) {
   return j.dump(2) + "\n";
 }
 
+std::string unmetLimits(const RunResult& result) {
+  const Schedule& plan = result.plan;
+  const UnitSystem sys = result.job.units;
+  std::string text;
+  const struct {
+    Binding limit;
+    const char* option;
+    Dimension dimension;
+  } kinds[] = {{Binding::Chip, "--max-chip", Dimension::Length},
+               {Binding::Force, "--max-force", Dimension::Force},
+               {Binding::Torque, "--max-torque", Dimension::Torque},
+               {Binding::Power, "--max-power", Dimension::Power}};
+  for (const auto& k : kinds) {
+    std::vector<int> lines;
+    const UnmetLimit* worst = nullptr;
+    std::size_t steps = 0;
+    for (const UnmetLimit& u : plan.unmet) {
+      if (u.limit != k.limit) continue;
+      ++steps;
+      const int line = result.sim.steps[u.step].line;
+      if (lines.empty() || lines.back() != line) lines.push_back(line);
+      if (!worst || u.load > worst->load) worst = &u;
+    }
+    if (!worst) continue;
+    std::sort(lines.begin(), lines.end());
+    lines.erase(std::unique(lines.begin(), lines.end()), lines.end());
+    std::string named;
+    for (std::size_t i = 0; i < lines.size() && i < 8; ++i)
+      named += (i ? ", " : "") + std::to_string(lines[i]);
+    if (lines.size() > 8) named += " and " + std::to_string(lines.size() - 8) + " more";
+    if (!text.empty()) text += "; ";
+    text += std::string(k.option) + " " + formatQuantity(worst->value, k.dimension, sys) +
+            " cannot be met on " + std::to_string(steps) + " step(s) of line(s) " + named +
+            ": at the lowest feed allowed line " +
+            std::to_string(result.sim.steps[worst->step].line) + " still carries " +
+            formatQuantity(worst->load, k.dimension, sys) + " at " +
+            formatQuantity(worst->feed, Dimension::Feed, sys);
+  }
+  return text;
+}
+
 std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutputs& written) {
   const Job& job = result.job;
   auto length = [&](double v) { return formatQuantity(v, Dimension::Length, job.units); };
@@ -431,6 +472,27 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
     w.push_back(std::to_string(result.sim.plungeSteps) +
                 " cutting step(s) plunge straight down: the force model covers the flutes' "
                 "sides, not the end face; their chip and forces are left empty (NaN)");
+  if (job.scheduling() && !result.plan.unmet.empty())
+    w.push_back(unmetLimits(result) + ": written anyway (--allow-unmet)");
+  if (job.scheduling()) {
+    std::vector<int> lines;
+    for (std::size_t i = 0; i < result.plan.binding.size(); ++i)
+      if (result.plan.binding[i] == Binding::Unmodelled &&
+          (lines.empty() || lines.back() != result.sim.steps[i].line))
+        lines.push_back(result.sim.steps[i].line);
+    std::sort(lines.begin(), lines.end());
+    lines.erase(std::unique(lines.begin(), lines.end()), lines.end());
+    if (!lines.empty()) {
+      std::string named;
+      for (std::size_t i = 0; i < lines.size() && i < 8; ++i)
+        named += (i ? ", " : "") + std::to_string(lines[i]);
+      if (lines.size() > 8) named += " and " + std::to_string(lines.size() - 8) + " more";
+      w.push_back(
+          "the force model does not cover the end face's cut on plunges, ramps and helices: "
+          "their feeds were kept at most as programmed (line(s) " +
+          named + ")");
+    }
+  }
   if (result.sim.stoppedSteps > 0)
     w.push_back(std::to_string(result.sim.stoppedSteps) +
                 " cutting step(s) with the spindle stopped or no S word: no chip or forces; "

@@ -31,4 +31,8 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written);
 /// The warnings of a run, without the "warning: " prefix (rapids that cut, an open mesh).
 std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutputs& written);
 
+/// The schedule's unmet limits (Schedule::unmet) in one message, per limit: how many steps on
+/// which lines, and the largest load left at the lowest feed allowed; "" when all are met.
+std::string unmetLimits(const RunResult& result);
+
 }  // namespace engage

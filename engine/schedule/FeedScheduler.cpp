@@ -103,9 +103,9 @@ void limitMotion(const SimulationResult& sim, std::vector<double>& feed, double 
 /// the programmed feed is a level, so unchanged steps keep it, and any two levels of a move
 /// differ by at least the factor 1 + q. Hysteresis: a step keeps the previous step's level
 /// while that is at most q/2 above its own wanted feed, so that the noise of the measured MRR
-/// does not toggle F words. Levels below `floor` are lifted to it.
-void quantizeDown(const SimulationResult& sim, std::vector<double>& feed, double floor, double q,
-                  bool hysteresis) {
+/// does not toggle F words. Levels below the step's floor are lifted to it.
+void quantizeDown(const SimulationResult& sim, std::vector<double>& feed,
+                  const std::vector<double>& floor, double q, bool hysteresis) {
   double previous = 0.0;
   for (std::size_t i = 0; i < feed.size(); ++i) {
     if (!isFeedStep(sim.steps[i])) {
@@ -115,7 +115,7 @@ void quantizeDown(const SimulationResult& sim, std::vector<double>& feed, double
     const double base = sim.steps[i].feed;
     const double k = std::floor(std::log(feed[i] / base) / std::log1p(q) + 1e-9);
     double level =
-        std::max(std::min(feed[i], base * std::pow(1.0 + q, k)), std::min(floor, feed[i]));
+        std::max(std::min(feed[i], base * std::pow(1.0 + q, k)), std::min(floor[i], feed[i]));
     if (hysteresis && previous > level && previous <= feed[i] * (1.0 + 0.5 * q)) level = previous;
     feed[i] = level;
     previous = level;
@@ -212,6 +212,8 @@ const char* bindingName(Binding b) {
       return "torque";
     case Binding::Power:
       return "power";
+    case Binding::Unmodelled:
+      return "unmodelled";
   }
   return "none";
 }
@@ -281,9 +283,10 @@ void chooseTargets(const SimulationResult& sim, const ScheduleOptions& o, Schedu
 }
 
 /// Per step the feed the targets and limits want (out.wanted) and what bounds it
-/// (out.binding), within [fMin, fMax].
+/// (out.binding), within [floor, fMax]; the physics limits that need less than the floor
+/// (out.unmet).
 void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const ScheduleOptions& o,
-                 double fMin, double fMax, Schedule& out) {
+                 const std::vector<double>& floor, double fMax, Schedule& out) {
   const auto& st = sim.steps;
   const bool physics = o.physicsLimits();
   out.wanted.assign(st.size(), 0.0);
@@ -291,6 +294,7 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
   for (std::size_t i = 0; i < st.size(); ++i) {
     const StepRecord& s = st[i];
     if (!isFeedStep(s)) continue;
+    const double fMin = floor[i];
     if (path.moves[s.move].fixedFeed()) {
       // Threading and probing feeds are the controller's (pitch x speed, probe feed).
       out.wanted[i] = s.feed;
@@ -324,7 +328,7 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
       };
       if (std::isnan(l.hMax)) {
         // No load model (a plunge, a stopped spindle): the programmed feed, or lower.
-        lower(1.0, Binding::NoTarget);
+        lower(1.0, Binding::Unmodelled);
       } else {
         if (o.maxChip > 0.0 && l.hMax > 0.0) lower(o.maxChip / l.hMax, Binding::Chip);
         if (o.maxForce > 0.0) lower(scaleForPeak(l, o.maxForce), Binding::Force);
@@ -336,15 +340,35 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
         f = fMax;
         out.binding[i] = Binding::FeedMax;
       }
+      if (physicsBinding(out.binding[i]) && f < fMin) {
+        // Met only below the lowest feed allowed: the load that remains there.
+        const ScaledLoad at = scaleLoad(l, fMin / s.feed);
+        const Binding b = out.binding[i];
+        out.unmet.push_back({i, b,
+                             b == Binding::Chip     ? o.maxChip
+                             : b == Binding::Force  ? o.maxForce
+                             : b == Binding::Torque ? o.maxTorque
+                                                    : o.maxPower,
+                             b == Binding::Chip     ? at.hMax
+                             : b == Binding::Force  ? at.peak
+                             : b == Binding::Torque ? at.torque
+                                                    : at.power,
+                             fMin});
+      }
     }
     // Plunges (no horizontal motion) load the cutter's end, not its flank: never faster
-    // than programmed.
+    // than programmed. Under a physics limit no step that descends is (ramps, helices: the
+    // end face cuts, which the force model leaves out).
     const Move& m = path.moves[s.move];
     const bool plunge =
         m.kind == MoveKind::Line && (m.end.head<2>() - m.start.head<2>()).norm() < 1e-9;
     if (plunge && f > s.feed) {
       f = s.feed;
       out.binding[i] = Binding::Plunge;
+    }
+    if (physics && m.end.z() < m.start.z() - 1e-9 && f > s.feed) {
+      f = s.feed;
+      out.binding[i] = Binding::Unmodelled;
     }
     out.wanted[i] = std::clamp(f, fMin, fMax);
     if (f < fMin) out.binding[i] = Binding::FeedMin;
@@ -356,7 +380,7 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
 /// (out.feed): acceleration and jerk, F-word levels, short runs merged, one feed for the lines
 /// the writer cannot split; steps held below what they wanted by that marked Acceleration.
 void settleFeeds(const Toolpath& path, const SimulationResult& sim, const ScheduleOptions& o,
-                 double fMin, Schedule& out) {
+                 const std::vector<double>& floor, Schedule& out) {
   const auto& st = sim.steps;
   const bool physics = o.physicsLimits();
   // Lines that the writer cannot split (canned cycles: several feed moves on one line;
@@ -393,7 +417,7 @@ void settleFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
     for (int round = 0; (round < 50 && !physics) || !hysteresis; ++round) {
       const std::vector<double> before = out.feed;
       limitMotion(sim, out.feed, o.acceleration, o.jerk);
-      quantizeDown(sim, out.feed, fMin, o.minChange, hysteresis);
+      quantizeDown(sim, out.feed, floor, o.minChange, hysteresis);
       mergeShortRuns(sim, out.feed, o.minSegment);
       unify(out.feed);
       if (out.feed == before) break;
@@ -452,17 +476,20 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   for (const StepRecord& s : st)
     programmedMax = std::max(programmedMax, s.feed);
   const double fMax = o.feedMax > 0.0 ? o.feedMax : 2.0 * programmedMax;
-  const double fMin = o.feedMin > 0.0 ? o.feedMin : std::min(1.0, fMax);
-  if (!(fMin <= fMax))
-    throw ParameterError("--feed-min " + formatQuantity(fMin, Dimension::Feed, UnitSystem::Metric) +
-                         " exceeds --feed-max " +
-                         formatQuantity(fMax, Dimension::Feed, UnitSystem::Metric));
+  if (o.feedMin > 0.0 && !(o.feedMin <= fMax))
+    throw ParameterError(
+        "--feed-min " + formatQuantity(o.feedMin, Dimension::Feed, UnitSystem::Metric) +
+        " exceeds --feed-max " + formatQuantity(fMax, Dimension::Feed, UnitSystem::Metric));
+  // Each step's lowest feed: --feed-min, else a share of its programmed feed.
+  std::vector<double> floor(st.size(), 0.0);
+  for (std::size_t i = 0; i < st.size(); ++i)
+    floor[i] = std::min(fMax, o.feedMin > 0.0 ? o.feedMin : kFeedMinShare * st[i].feed);
   if (!(o.minChange > 0.0)) throw ParameterError("--min-change must be positive");
   if (o.jerk < 0.0 || o.acceleration < 0.0)
     throw ParameterError("--accel and --jerk must not be negative");
 
-  wantedFeeds(path, sim, o, fMin, fMax, out);
-  settleFeeds(path, sim, o, fMin, out);
+  wantedFeeds(path, sim, o, floor, fMax, out);
+  settleFeeds(path, sim, o, floor, out);
   planPieces(path, sim, out);
   std::vector<double> programmed(st.size(), 0.0);
   for (std::size_t i = 0; i < st.size(); ++i)

@@ -9,6 +9,7 @@
 /// nothing run at the air feed; plunges never run faster than programmed; lines the writer
 /// cannot split (canned cycles, splines) take their lowest feed.
 
+#include "cutters/Error.h"
 #include "engine/gcode/GcodeWriter.h"
 #include "engine/gcode/Toolpath.h"
 #include "engine/sim/Simulation.h"
@@ -26,7 +27,8 @@ struct ScheduleOptions {
   /// Per tool number, a target that replaces targetMrr for that tool's steps (e.g. from a
   /// force limit and the tool's own diameter).
   std::map<int, double> targetByTool;
-  double feedMin = 0.0;       ///< lowest feed the scheduler may command
+  double feedMin =
+      0.0;  ///< lowest feed the scheduler may command (0: kFeedMinShare of each step's)
   double feedMax = 0.0;       ///< highest (0: 2 x the highest programmed feed)
   double airFeed = 0.0;       ///< feed of steps that cut nothing (0: the programmed feed)
   double acceleration = 0.0;  ///< tangential acceleration limit (0: none)
@@ -51,7 +53,15 @@ struct ScheduleOptions {
   bool physicsLimits() const {
     return maxChip > 0.0 || maxForce > 0.0 || maxTorque > 0.0 || maxPower > 0.0;
   }
+  /// Write the re-fed program even where a limit holds only below the lowest feed allowed
+  /// (Schedule::unmet); otherwise the run refuses it (UnmetLimitError).
+  bool allowUnmet = false;
 };
+
+/// Without --feed-min, the lowest feed a step may get: this share of its programmed feed. A
+/// limit that needs less is not met (Schedule::unmet), rather than met by a program that
+/// crawls (a force limit below a cut's edge forces asked for 1 mm/min and 3.7 hours).
+constexpr double kFeedMinShare = 0.1;
 
 /// The MRR that keeps the tangential cutting force at `force` (N), paper Eq 17-18 inverted:
 /// MRR = F v / E with v = pi D N. mm^3/min, for specific energy E (J/mm^3), cutter diameter D
@@ -63,7 +73,9 @@ double mrrForForce(double force, double specificEnergy, double diameter, double 
 /// NoTarget: a tool of a multi-tool program with no steady straight steps to take an auto
 /// target from (a drill): its steps keep their programmed feeds. Chip, Force, Torque, Power:
 /// that physics limit (ScheduleOptions::maxChip ...) allows less than the MRR target (or, with
-/// no MRR target, less than the other limits).
+/// no MRR target, less than the other limits). Unmodelled: under a physics limit, a step whose
+/// load the force model does not cover (a plunge, a ramp or a helix, where the end face cuts; a
+/// stopped spindle): never faster than programmed.
 enum class Binding {
   None,
   FeedMin,
@@ -76,7 +88,23 @@ enum class Binding {
   Chip,
   Force,
   Torque,
-  Power
+  Power,
+  Unmodelled
+};
+
+/// A physics limit a step cannot meet at the lowest feed it may get.
+struct UnmetLimit {
+  std::size_t step = 0;
+  Binding limit = Binding::Force;  ///< Chip, Force, Torque or Power
+  double value = 0.0;              ///< the limit (mm, N, N*m, W)
+  double load = 0.0;               ///< the step's load at `feed`, same unit
+  double feed = 0.0;               ///< the lowest feed it may get, mm/min
+};
+
+/// A schedule whose limits cannot all be met, refused (exit status 6 from the application).
+class UnmetLimitError : public Error {
+ public:
+  explicit UnmetLimitError(const std::string& message) : Error(message) {}
 };
 
 /// The result: per-step feeds and the plan for the writer.
@@ -91,8 +119,9 @@ struct Schedule {
   double timeBefore = 0.0;        ///< feed-move time with the programmed feeds, s
   double timeAfter = 0.0;         ///< with the scheduled feeds, s
   double rapidTime = 0.0;  ///< rapids at ScheduleOptions::rapidFeed (the same before and after), s
-  double maxAcceleration = 0.0;  ///< largest |Eq 24 acceleration| between scheduled steps, mm/s^2
-  std::size_t fWords = 0;        ///< feed pieces in the plan
+  double maxAcceleration = 0.0;   ///< largest |Eq 24 acceleration| between scheduled steps, mm/s^2
+  std::size_t fWords = 0;         ///< feed pieces in the plan
+  std::vector<UnmetLimit> unmet;  ///< the steps whose limit holds only below their lowest feed
 };
 
 /// Schedule feeds for a simulated tool path. Throws ParameterError for inconsistent limits.

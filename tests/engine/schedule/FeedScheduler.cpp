@@ -484,3 +484,80 @@ TEST_CASE("a plunge never runs faster than programmed, whatever the target", "[s
     CHECK(sc.binding[i] == Binding::Plunge);
   }
 }
+
+namespace {
+
+/// A step load whose peak force is 80 + 20 s N at feed scale s (kept at kPeakScales, exact
+/// for a linear peak), chip 0.02 s mm, no torque.
+StepLoad linearPeakLoad() {
+  StepLoad l;
+  l.hMax = 0.02;
+  for (std::size_t k = 0; k < kPeakScales.size(); ++k)
+    l.peakAt[k] = 80.0 + 20.0 * kPeakScales[k];
+  l.peak = 100.0;
+  return l;
+}
+
+/// Ten 1 mm steps at 100 mm/min along move `move` of a program, each with linearPeakLoad().
+SimulationResult loadedRun(std::size_t move, int line) {
+  SimulationResult sim = straightRun(10, 100.0, [](int) { return 500.0; });
+  for (StepRecord& s : sim.steps) {
+    s.move = move;
+    s.line = line;
+  }
+  sim.loads.assign(sim.steps.size(), linearPeakLoad());
+  return sim;
+}
+
+}  // namespace
+
+TEST_CASE("under a load limit a descending step is never fed faster than programmed",
+          "[schedule][physics]") {
+  // --max-force 200 N asks for the scale (200 - 80) / 20 = 6 on a load of 80 + 20 s N: a level
+  // step rises to --feed-max (2 x 100 mm/min); a ramp (X10 while Z falls 1 mm) cuts with its
+  // end face too, which the force model leaves out: it keeps 100 mm/min, marked unmodelled.
+  const Toolpath path = readProgramText(
+      "G21 G90\nG0 X0 Y0 Z0\nG1 X10 Z-1 F100\nG1 X20 F100\nM2\n", "ramp.ngc");
+  REQUIRE(path.moves.size() == 3);
+  ScheduleOptions o;
+  o.mrrTarget = false;
+  o.maxForce = 200.0;
+  const Schedule ramp = scheduleFeeds(path, loadedRun(1, 3), o);
+  const Schedule level = scheduleFeeds(path, loadedRun(2, 4), o);
+  for (std::size_t i = 0; i < 10; ++i) {
+    CHECK(ramp.feed[i] <= 100.0 * (1 + 1e-12));
+    CHECK(ramp.binding[i] == Binding::Unmodelled);
+    CHECK(level.feed[i] > 150.0);  // the levels 100 x 1.05^k below 200
+  }
+  CHECK(ramp.unmet.empty());
+}
+
+TEST_CASE("a load limit below what the lowest feed gives is reported, with that load",
+          "[schedule][physics]") {
+  // Peak 80 + 20 s N, programmed 100 mm/min, no --feed-min: the lowest feed is a tenth, 10
+  // mm/min (s = 0.1), where the peak is 82 N. --max-force 81 N is met only below it: every step
+  // is unmet, carrying 82 N at 10 mm/min. 90 N is met at s = 0.5 (50 mm/min).
+  const Toolpath path = readProgramText("G21 G90\nG0 X0 Y0 Z0\nG1 X10 F100\nM2\n", "cut.ngc");
+  ScheduleOptions o;
+  o.mrrTarget = false;
+  o.maxForce = 81.0;
+  const Schedule tight = scheduleFeeds(path, loadedRun(1, 3), o);
+  REQUIRE(tight.unmet.size() == 10);
+  for (const UnmetLimit& u : tight.unmet) {
+    CHECK(u.limit == Binding::Force);
+    CHECK(u.value == 81.0);
+    CHECK(u.load == Approx(82.0).epsilon(1e-12));
+    CHECK(u.feed == Approx(10.0).epsilon(1e-12));
+  }
+  for (double f : tight.feed)
+    CHECK(f == Approx(10.0).epsilon(1e-12));
+  o.maxForce = 90.0;
+  const Schedule met = scheduleFeeds(path, loadedRun(1, 3), o);
+  CHECK(met.unmet.empty());
+  for (double f : met.feed)
+    CHECK(f <= 50.0 * (1 + 1e-12));
+  // --feed-min 5 mm/min: s = 0.05 gives 81 N, which meets 81 N.
+  o.maxForce = 81.0;
+  o.feedMin = 5.0;
+  CHECK(scheduleFeeds(path, loadedRun(1, 3), o).unmet.empty());
+}
