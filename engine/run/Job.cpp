@@ -400,6 +400,7 @@ std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& valu
   if (maxSteps < 1) throw ParameterError("--max-steps must be positive");
   ro.maxMoves = static_cast<std::size_t>(maxMoves);
   job.path = project ? readPrograms(project->files, ro) : readProgram(job.program, ro);
+  job.reader = ro;
   job.simulation.maxSteps = static_cast<std::size_t>(maxSteps);
   // Only a re-fed program is written back, from its words' positions: a run that is not
   // keeps none (megabytes on a long program).

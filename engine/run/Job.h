@@ -7,6 +7,7 @@
 /// option and the value found.
 
 #include "cutters/AptCutter.h"
+#include "engine/gcode/GcodeReader.h"
 #include "engine/gcode/Toolpath.h"
 #include "engine/run/CutterOptions.h"
 #include "engine/run/OptionTable.h"
@@ -41,8 +42,9 @@ struct StockSpec {
 /// A job, checked: everything in it is valid.
 struct Job {
   JobCommand command = JobCommand::Simulate;
-  std::string program;  ///< the program's path, as given (or a CAMotics project's)
-  Toolpath path;        ///< the program, read
+  std::string program;   ///< the program's path, as given (or a CAMotics project's)
+  Toolpath path;         ///< the program, read
+  ReaderOptions reader;  ///< how it was read (a re-fed program is read back the same way)
   /// A CAMotics project's programs, run one after the other; empty for a program.
   std::vector<std::string> projectFiles;
   std::string toolText;  ///< the --tool value, as typed (summary.json)

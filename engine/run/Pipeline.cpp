@@ -1,5 +1,6 @@
 #include "engine/run/Pipeline.h"
 
+#include "engine/run/RefedProgram.h"
 #include "engine/run/Summary.h"
 
 #include "cutters/Error.h"
@@ -83,6 +84,55 @@ CrossCheck crossCheck(const Job& job, const SimulationResult& r, Stock& other) {
   return c;
 }
 
+/// The re-fed program read back as the program was and simulated in a fresh stock; its worst
+/// step against each limit the schedule was given (and --feed-max).
+Verification verifySchedule(const RunResult& r) {
+  const Job& job = r.job;
+  const ScheduleOptions& o = job.schedule;
+  Verification v;
+  const Toolpath path = readProgramText(r.refed, job.mainProgram(), job.reader);
+  const std::unique_ptr<Stock> stock = makeStock(job.stock, job.stockModel, job.voxel);
+  const SimulationResult sim = simulate(path, job.cutters, *stock, job.simulation);
+  v.done = true;
+  v.steps = sim.steps.size();
+  v.removed = sim.removed;
+  v.seconds = sim.seconds;
+  double programmedMax = 0.0;
+  for (const StepRecord& s : r.sim.steps)
+    programmedMax = std::max(programmedMax, s.feed);
+  auto check = [&](const char* option, Dimension d, double limit, auto value) {
+    if (!(limit > 0.0)) return;
+    LimitCheck c{option, d, limit, 0.0, 0, true};
+    for (std::size_t i = 0; i < sim.steps.size(); ++i) {
+      const StepRecord& s = sim.steps[i];
+      if (s.kind == MoveKind::Rapid || !(s.feed > 0.0)) continue;
+      const double x = value(i);
+      if (x > c.worst) {  // NaN (no model) never wins
+        c.worst = x;
+        c.line = s.line;
+      }
+    }
+    c.holds = c.worst <= limit * (1.0 + kVerifyTolerance);
+    v.checks.push_back(c);
+  };
+  const bool loads = sim.loads.size() == sim.steps.size();
+  if (loads) {
+    check("--max-chip", Dimension::Length, o.maxChip,
+          [&](std::size_t i) { return sim.loads[i].hMax; });
+    check("--max-force", Dimension::Force, o.maxForce,
+          [&](std::size_t i) { return sim.loads[i].peak; });
+    check("--max-torque", Dimension::Torque, o.maxTorque,
+          [&](std::size_t i) { return sim.loads[i].torque; });
+    check("--max-power", Dimension::Power, o.maxPower,
+          [&](std::size_t i) { return sim.loads[i].power; });
+  }
+  check("--feed-max", Dimension::Feed, o.feedMax > 0.0 ? o.feedMax : 2.0 * programmedMax,
+        [&](std::size_t i) {
+          return path.moves[sim.steps[i].move].fixedFeed() ? 0.0 : sim.steps[i].feed;
+        });
+  return v;
+}
+
 }  // namespace
 
 namespace {
@@ -114,6 +164,7 @@ double memoryEstimate(const Job& job) {
     };
     bytes += one(job.stockModel);
     if (job.crossCheck) bytes += one(job.otherModel());
+    if (job.scheduling()) bytes += one(job.stockModel);  // the re-fed program's re-simulation
   }
   return bytes;
 }
@@ -148,7 +199,9 @@ RunResult executeRun(PreparedRun run, const ProgressFunction& progress) {
       throw UnmetLimitError(unmetLimits(r) +
                             " (the lowest feed: --feed-min, else a tenth of the programmed); "
                             "give --allow-unmet to write the program anyway");
-    r.refed = writeProgram(readFile(job.mainProgram()), job.path, r.plan.plan);
+    r.refed =
+        withScheduleHeader(writeProgram(readFile(job.mainProgram()), job.path, r.plan.plan), job);
+    if (r.stock) r.verified = verifySchedule(r);
   }
   // The first step at the peak: a later one counts as higher only beyond rounding (a slot's
   // steps on two lines took the same MRR to the last bits, and which of them was "higher"

@@ -45,6 +45,27 @@ using ProgressFunction = std::function<void(std::size_t, std::size_t)>;
 constexpr double kSamePeak = 1e-9;
 
 /// Everything a run made.
+/// One limit of a schedule, checked on the re-simulated re-fed program (its worst step).
+struct LimitCheck {
+  std::string option;  ///< the option that set it: "--max-force", "--feed-max", ...
+  Dimension dimension = Dimension::Force;
+  double limit = 0.0;
+  double worst = 0.0;  ///< the largest value over the re-simulated cutting steps
+  int line = 0;        ///< the line of that step in the re-fed program
+  bool holds = true;   ///< worst <= limit, within kVerifyTolerance above
+};
+
+/// A schedule's re-fed program read back and simulated again in a fresh stock: what the
+/// machine will do, checked against every limit. Within 1 % above a limit counts as holding.
+struct Verification {
+  bool done = false;               ///< a schedule with a stock
+  std::size_t steps = 0;           ///< of the re-simulation
+  double removed = 0.0;            ///< mm^3 (the path is the same: the schedule's removal)
+  double seconds = 0.0;            ///< the re-simulation's
+  std::vector<LimitCheck> checks;  ///< the limits given, and --feed-max
+};
+constexpr double kVerifyTolerance = 0.01;
+
 struct RunResult {
   Job job;
   std::unique_ptr<Stock> stock;  ///< the final stock (null without one)
@@ -53,14 +74,16 @@ struct RunResult {
   CrossCheck cross;          ///< when crossChecked
   Schedule plan;             ///< empty unless the job schedules
   std::string refed;         ///< the re-fed program text (schedule jobs)
+  Verification verified;     ///< the re-fed program re-simulated (schedule jobs with a stock)
   std::size_t peakStep = 0;  ///< the first step of the highest measured MRR (0 when none)
 };
 
 /// The memory a run of `job` may come to hold, bytes, for a batch to decide how many jobs run
-/// side by side: 64 MB for the program, steps and outputs, plus per stock (and the
-/// cross-check's) of a box: the voxel model's bound (VoxelStock::memoryBound: 845 MB for the
-/// finishing benchmark at 0.1 mm, whose run peaks at 734 MB) or 1 kB per dexel ray (that run
-/// with dexels: 350 MB for 422,500 rays). A mesh stock counts its bounds unknown: the 64 MB.
+/// side by side: 64 MB for the program, steps and outputs, plus per stock (the run's, the
+/// cross-check's, a schedule's re-simulation's) of a box: the voxel model's bound
+/// (VoxelStock::memoryBound: 845 MB for the finishing benchmark at 0.1 mm, whose run peaks at 734
+/// MB) or 1 kB per dexel ray (that run with dexels: 350 MB for 422,500 rays). A mesh stock counts
+/// its bounds unknown: the 64 MB.
 double memoryEstimate(const Job& job);
 
 /// Build the job's stock (and the cross-check's) and check that the tool path reaches it.

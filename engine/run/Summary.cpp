@@ -64,6 +64,26 @@ ordered_json crossCheckJson(const RunResult& result) {
           {"largest_differences", places}};
 }
 
+/// The re-simulated re-fed program's checks (null without a stock).
+ordered_json verificationJson(const RunResult& result) {
+  const Verification& v = result.verified;
+  if (!v.done) return nullptr;
+  const UnitSystem sys = result.job.units;
+  ordered_json checks = ordered_json::array();
+  for (const LimitCheck& c : v.checks)
+    checks.push_back({{"option", c.option},
+                      {"limit", toDisplay(c.limit, c.dimension, sys)},
+                      {"worst", toDisplay(c.worst, c.dimension, sys)},
+                      {"line", c.line},
+                      {"holds", c.holds},
+                      {"unit", std::string(unitLabel(c.dimension, sys))}});
+  return {{"steps", v.steps},
+          {"run_time_s", v.seconds},
+          {"removed", toDisplay(v.removed, Dimension::Volume, sys)},
+          {"tolerance_relative", kVerifyTolerance},
+          {"checks", checks}};
+}
+
 ordered_json scheduleJson(const RunResult& result) {
   const UnitSystem sys = result.job.units;
   const ScheduleOptions& sched = result.job.schedule;
@@ -119,7 +139,8 @@ ordered_json scheduleJson(const RunResult& result) {
           {"mrr_peak_after", rate(peakAfter)},
           {"feed_pieces", plan.fWords},
           {"steps_limited", counts},
-          {"limited_places", places}};
+          {"limited_places", places},
+          {"verified", verificationJson(result)}};
 }
 
 /// The peaks of a run's cutting physics (SimulationResult::loads), at the programmed feeds or,
@@ -472,6 +493,12 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
     w.push_back(std::to_string(result.sim.plungeSteps) +
                 " cutting step(s) plunge straight down: the force model covers the flutes' "
                 "sides, not the end face; their chip and forces are left empty (NaN)");
+  for (const LimitCheck& c : result.verified.checks)
+    if (!c.holds)
+      w.push_back("the re-fed program, re-simulated, exceeds " + c.option + " " +
+                  formatQuantity(c.limit, c.dimension, job.units) + ": " +
+                  formatQuantity(c.worst, c.dimension, job.units) + " at its line " +
+                  std::to_string(c.line));
   if (job.scheduling() && !result.plan.unmet.empty())
     w.push_back(unmetLimits(result) + ": written anyway (--allow-unmet)");
   if (job.scheduling()) {
@@ -618,6 +645,17 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
   if (job.scheduling() && plan.rapidTime > 0.0)
     appendf(report, "cycle time with rapids: %.1f s -> %.1f s (rapids %.1f s)\n",
             plan.timeBefore + plan.rapidTime, plan.timeAfter + plan.rapidTime, plan.rapidTime);
+  if (result.verified.done) {
+    const Verification& v = result.verified;
+    std::string checks;
+    for (const LimitCheck& c : v.checks)
+      checks += "; " + c.option + " " + q(c.worst, c.dimension) + " at re-fed line " +
+                std::to_string(c.line) + " (limit " + q(c.limit, c.dimension) + ") " +
+                (c.holds ? "holds" : "EXCEEDED");
+    appendf(report,
+            "verified: the re-fed program re-simulated, %zu steps in %.2f s, removed %s%s\n",
+            v.steps, v.seconds, q(v.removed, Dimension::Volume).c_str(), checks.c_str());
+  }
   std::string plotted, programName;
   for (const std::string& f : written.plots)
     plotted += "," + f;

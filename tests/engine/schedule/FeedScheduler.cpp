@@ -54,6 +54,21 @@ SimulationResult straightRun(int count, double feed, const std::function<double(
   return sim;
 }
 
+/// A 6 mm, 3-flute flat end mill slotting 2 mm deep along X (60 mm) at 600 mm/min and 10000
+/// rpm in Al 7075 (f_z = 0.02 mm), no helix: the program written into `dir`.
+OptionValues loadedSlotJob(const test::TempFolder& dir) {
+  const std::string program =
+      dir.write("slot.ngc", "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z-2 F100\nG1 X60 F600\nG0 Z5\nM2\n");
+  return {{"program", program},
+          {"tool", "flat"},
+          {"diameter", "6mm"},
+          {"flutes", "3"},
+          {"stock", "box:-10,-10,-10,70,10,0"},
+          {"material", "aluminium-7075-t6"},
+          {"spindle", "10000rpm"},
+          {"helix", "0deg"}};
+}
+
 }  // namespace
 
 TEST_CASE("re-fed corner program: MRR at the target, acceleration within the limit", "[schedule]") {
@@ -395,16 +410,7 @@ TEST_CASE("each load limit binds on a slot and holds its load near it from below
   // (rounded down), more than the limit / 1.05 (chip, MRR: proportional to the feed; torque,
   // power: cut s^p + edge, p <= 1; peak force: convex in s from a non-negative start).
   test::TempFolder dir("schedule_limits");
-  const std::string program =
-      dir.write("slot.ngc", "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z-2 F100\nG1 X60 F600\nG0 Z5\nM2\n");
-  const OptionValues base = {{"program", program},
-                             {"tool", "flat"},
-                             {"diameter", "6mm"},
-                             {"flutes", "3"},
-                             {"stock", "box:-10,-10,-10,70,10,0"},
-                             {"material", "aluminium-7075-t6"},
-                             {"spindle", "10000rpm"},
-                             {"helix", "0deg"}};
+  const OptionValues base = loadedSlotJob(dir);
   // The loads at the programmed feed, to set each limit at 85 % of the steady slot's: above
   // what the edge (rubbing) terms alone give, which no feed takes away (the slot's peak force
   // is 106 N, 77 N of it at zero feed).
@@ -516,8 +522,8 @@ TEST_CASE("under a load limit a descending step is never fed faster than program
   // --max-force 200 N asks for the scale (200 - 80) / 20 = 6 on a load of 80 + 20 s N: a level
   // step rises to --feed-max (2 x 100 mm/min); a ramp (X10 while Z falls 1 mm) cuts with its
   // end face too, which the force model leaves out: it keeps 100 mm/min, marked unmodelled.
-  const Toolpath path = readProgramText(
-      "G21 G90\nG0 X0 Y0 Z0\nG1 X10 Z-1 F100\nG1 X20 F100\nM2\n", "ramp.ngc");
+  const Toolpath path =
+      readProgramText("G21 G90\nG0 X0 Y0 Z0\nG1 X10 Z-1 F100\nG1 X20 F100\nM2\n", "ramp.ngc");
   REQUIRE(path.moves.size() == 3);
   ScheduleOptions o;
   o.mrrTarget = false;
@@ -560,4 +566,36 @@ TEST_CASE("a load limit below what the lowest feed gives is reported, with that 
   o.maxForce = 81.0;
   o.feedMin = 5.0;
   CHECK(scheduleFeeds(path, loadedRun(1, 3), o).unmet.empty());
+}
+
+TEST_CASE("every schedule re-simulates its re-fed program against each limit",
+          "[schedule][physics]") {
+  // The slot of the load-limit case above (peak force 106 N at the programmed feed, 77 N of
+  // it at zero feed). 95 N is met at a lower feed: the re-fed program, read back and run
+  // again in a fresh stock, removes what the schedule's run removed (the same path; 1e-9 for
+  // the order of sums) and its worst step holds 95 N within 1 %. 78 N is met only below the
+  // lowest feed (a tenth of 600 mm/min, where the peak is about 77 + 29 x 0.1 = 80 N):
+  // refused; with --allow-unmet written, and the re-simulation says the limit does not hold.
+  test::TempFolder dir("schedule_verify");
+  OptionValues v = loadedSlotJob(dir);
+  v["max-force"] = "95N";
+  const RunResult r = runJob(makeJob(JobCommand::Schedule, v));
+  REQUIRE(r.verified.done);
+  CHECK(r.verified.removed == Approx(r.sim.removed).epsilon(1e-9));
+  REQUIRE(r.verified.checks.size() == 2);  // --max-force, --feed-max
+  CHECK(r.verified.checks[0].option == "--max-force");
+  CHECK(r.verified.checks[0].worst > 0.9 * 95.0);
+  CHECK(r.verified.checks[0].worst <= 95.0 * 1.01);
+  CHECK(r.verified.checks[0].holds);
+  CHECK(r.verified.checks[1].option == "--feed-max");
+  CHECK(r.verified.checks[1].holds);
+
+  v["max-force"] = "78N";
+  CHECK_THROWS_AS(runJob(makeJob(JobCommand::Schedule, v)), UnmetLimitError);
+  v["allow-unmet"] = "true";
+  const RunResult unmet = runJob(makeJob(JobCommand::Schedule, v));
+  CHECK_FALSE(unmet.plan.unmet.empty());
+  REQUIRE_FALSE(unmet.verified.checks.empty());
+  CHECK_FALSE(unmet.verified.checks[0].holds);
+  CHECK(unmet.verified.checks[0].worst > 78.0 * 1.01);
 }
