@@ -93,18 +93,53 @@ StepLoad unmodelledLoad() {
 }
 
 StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Teeth& teeth,
-                     double fz, double rpm) {
+                     double fz, double rpm, const FaceCut& face) {
   StepLoad out;
   out.exponent = material.exponent();
   out.entry = e.entry;
   out.exit = e.exit;
-  if (!e.any() || !(fz > 0.0)) return out;
+  const FaceContact* fc =
+      face.contact && face.fa > 0.0 && face.contact->any() ? face.contact : nullptr;
+  const bool edges = e.any() && fz > 0.0;
+  if (!edges && !fc) return out;
+  const std::vector<EdgeSlice> none;
+  const std::vector<EdgeSlice>& slices = edges ? e.slices : none;
   const int N = std::max(1, teeth.count);
   const Gauss& g = gauss();
   // Mean per revolution: N teeth each sweeping the arcs once in 2 pi.
   Eigen::Vector3d force(0.0, 0.0, 0.0);
   double torqueCut = 0.0, torqueEdge = 0.0, hArea = 0.0, area = 0.0;
-  for (const EdgeSlice& s : e.slices) {
+  // The end face: each ring's samples on material, an element dr x dphi each (the frame is
+  // the edges' when they are in contact; a plunge's is the face's own).
+  const double faceDr = fc ? fc->radius / fc->rings : 0.0;
+  const double faceDphi = fc ? 2.0 * kPi / fc->angles : 0.0;
+  const ElementForce faceForce = fc ? element(material, face.fa) : ElementForce{};
+  auto faceOn = [&](int ring, double phi) {
+    int k = static_cast<int>(std::floor(phi / faceDphi));
+    k = ((k % fc->angles) + fc->angles) % fc->angles;
+    return fc->onMaterial[static_cast<std::size_t>(ring * fc->angles + k)] != 0;
+  };
+  if (fc) {
+    out.endFace = true;
+    out.hMax = face.fa;
+    for (int i = 0; i < fc->rings; ++i) {
+      const double r = (i + 0.5) * faceDr;
+      for (int k = 0; k < fc->angles; ++k) {
+        if (!fc->onMaterial[static_cast<std::size_t>(i * fc->angles + k)]) continue;
+        const double phi = (k + 0.5) * faceDphi;
+        const double w = faceDr * faceDphi;
+        const Directions d = directions(phi, 0.0);
+        const ElementForce& f = faceForce;
+        force += w * ((f.cut[0] + f.edge[0]) * d.t + (f.cut[1] + f.edge[1]) * d.r +
+                      (f.cut[2] + f.edge[2]) * d.a);
+        torqueCut += w * f.cut[0] * r;
+        torqueEdge += w * f.edge[0] * r;
+        hArea += w * face.fa;
+        area += w;
+      }
+    }
+  }
+  for (const EdgeSlice& s : slices) {
     const double sk = std::sin(s.kappa);
     const double db = s.dz / std::max(sk, 1e-6);
     for (const auto& arc : s.arcs) {
@@ -130,7 +165,8 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
     }
   }
   const double perRev = N / (2.0 * kPi);
-  const Eigen::Vector3d feed3(e.feed.x(), e.feed.y(), 0.0), side3(e.side.x(), e.side.y(), 0.0);
+  const Eigen::Vector2d feed2 = edges ? e.feed : fc->feed, side2 = edges ? e.side : fc->side;
+  const Eigen::Vector3d feed3(feed2.x(), feed2.y(), 0.0), side3(side2.x(), side2.y(), 0.0);
   force *= perRev;
   out.force = force.x() * feed3 + force.y() * side3 + Eigen::Vector3d(0.0, 0.0, force.z());
   out.hMean = area > 0.0 ? hArea / area : 0.0;
@@ -150,7 +186,7 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
   for (int m = 0; m < kRotationSamples; ++m) {
     Sample& sm = samples[static_cast<std::size_t>(m)];
     const double theta = pitch * m / kRotationSamples;
-    for (const EdgeSlice& s : e.slices) {
+    for (const EdgeSlice& s : slices) {
       const double sk = std::sin(s.kappa);
       const double db = s.dz / std::max(sk, 1e-6);
       for (int j = 0; j < N; ++j) {
@@ -166,6 +202,20 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
         sm.edge += db * (f.edge[0] * d.t + f.edge[1] * d.r + f.edge[2] * d.a);
       }
     }
+    // Each tooth's lip on the end face, along the radius at the tooth's angle.
+    if (fc)
+      for (int j = 0; j < N; ++j) {
+        const double phi = std::fmod(theta + j * pitch, 2.0 * kPi);
+        const Directions d = directions(phi, 0.0);
+        const ElementForce& f = faceForce;
+        for (int i = 0; i < fc->rings; ++i) {
+          if (!faceOn(i, phi)) continue;
+          sm.t += faceDr * f.cut[0] * d.t;
+          sm.r += faceDr * f.cut[1] * d.r;
+          sm.a += faceDr * f.cut[2] * d.a;
+          sm.edge += faceDr * (f.edge[0] * d.t + f.edge[1] * d.r + f.edge[2] * d.a);
+        }
+      }
   }
   const bool linear = material.model == ForceModel::Linear;
   const double pt = linear ? 1.0 : 1.0 - material.kienzle.mc;

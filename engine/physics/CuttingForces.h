@@ -17,8 +17,18 @@
 /// Means per revolution integrate each arc exactly enough (16-point Gauss-Legendre: 1e-9 for
 /// the linear model's trigonometric integrands, 1e-4 for Kienzle's h^(1-m)); the peak
 /// resultant samples the revolution every 1/90 of the tooth pitch, the teeth's edges lagging
-/// by z tan(helix) / R with height. Only the peripheral and corner edges cut: the end face
-/// of a flat end mill, which cuts in plunges and ramps, is not modelled (plunges get NaN).
+/// by z tan(helix) / R with height. The peripheral and corner edges cut with the horizontal
+/// feed; the end face of a flat end mill, which cuts where the step descends (plunges, ramps,
+/// helices), is the same model on the face's radial edges (lead angle kappa = 0) cutting the
+/// axial feed per tooth f_a: per lip element dr at radius r resting on material, tangential
+/// (K_tc f_a + K_te) dr, thrust along the axis (K_rc f_a + K_re) dr (the radial coefficient:
+/// the force normal to the surface cut), along the lip (K_ac f_a + K_ae) dr; Kienzle's k_c,
+/// k_f, k_p the same way. On a face wholly on material (a plunge into solid, a ramp's buried
+/// face) that is the drilling form (Altintas, Manufacturing Automation, 2nd ed., ch. 2,
+/// mechanics of drilling, the lips as radial edges): torque T = N (K_tc f_a + K_te) R^2 / 2,
+/// thrust F_z = N (K_rc f_a + K_re) R. A ball's or a cone's point, and a corner radius,
+/// cutting with the axial feed are not modelled (a plunge of such a cutter gets NaN;
+/// StepLoad::endFace says which steps hold the end's cut).
 
 #include "engine/physics/Engagement.h"
 #include "engine/physics/Material.h"
@@ -54,15 +64,26 @@ struct StepLoad {
   /// scales kPeakScales (convex in s: interpolating between them errs high).
   double torqueCut = 0.0, torqueEdge = 0.0, exponent = 1.0;
   std::array<double, kPeakScales.size()> peakAt{};
+  /// The end face's cut is in it: the step descends and the cutter's end is flat out to its
+  /// side (a flat end mill; a corner radius or a point cuts with the axial feed unmodelled).
+  bool endFace = false;
+};
+
+/// The end face's part of a step that descends: its contact and the axial feed per tooth f_a
+/// (mm).
+struct FaceCut {
+  const FaceContact* contact = nullptr;
+  double fa = 0.0;
 };
 
 /// The load of a step the model does not cover (a plunge, a stopped spindle): every value NaN.
 StepLoad unmodelledLoad();
 
 /// The load of a step with contact `e` cutting `material` with `teeth` at feed per tooth
-/// `fz` (mm, horizontal) and spindle speed `rpm` (its magnitude). No contact: all zero.
+/// `fz` (mm, horizontal) and spindle speed `rpm` (its magnitude), and its end face's cut
+/// `face` where it descends. No contact: all zero.
 StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Teeth& teeth,
-                     double fz, double rpm);
+                     double fz, double rpm, const FaceCut& face = {});
 
 /// The load's chip thickness, peak force, torque and power at feed scale s (the kept peaks
 /// interpolated; see StepLoad): what a step carries at a scheduled feed.

@@ -61,6 +61,45 @@ double edgeOffset(double radius, double phi, const Eigen::Vector2d& feed,
 
 // One function: it runs for every cutting step, and its slices, angular samples, boundary
 // refinements and wall readings share one reader of the stock.
+bool FaceContact::any() const {
+  return std::any_of(onMaterial.begin(), onMaterial.end(), [](std::uint8_t b) { return b != 0; });
+}
+
+FaceContact measureFace(const Stock& stock, const AptCutter& cutter, const Eigen::Vector3d& tip,
+                        const Eigen::Vector2d& feedDir, bool clockwise, std::size_t afterStep) {
+  constexpr int kRings = 8, kFaceAngles = 72;
+  FaceContact out;
+  const Eigen::Vector2d u =
+      feedDir.norm() > 0.0 ? Eigen::Vector2d(feedDir.normalized()) : Eigen::Vector2d(1.0, 0.0);
+  const Eigen::Vector2d left(-u.y(), u.x());
+  const Eigen::Vector2d v = clockwise ? left : Eigen::Vector2d(-left);
+  out.feed = u;
+  out.side = v;
+  // The flat end: the bottom's radius where the profile starts level (radiusAt(0)), if the
+  // profile's first piece is level (a flat or bull end; not a ball's or a cone's point).
+  const auto& profile = cutter.profile();
+  if (profile.empty() || profile.front().start.y() != 0.0 || profile.front().end.y() != 0.0)
+    return out;
+  out.radius = profile.front().end.x();
+  if (!(out.radius > 0.0)) return out;
+  out.rings = kRings;
+  out.angles = kFaceAngles;
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(kRings * kFaceAngles);
+  const double below = tip.z() - kOutside * stock.resolution();
+  for (int i = 0; i < kRings; ++i) {
+    const double r = (i + 0.5) * out.radius / kRings;
+    for (int k = 0; k < kFaceAngles; ++k) {
+      const double phi = (k + 0.5) * 2.0 * kPi / kFaceAngles;
+      const Eigen::Vector2d p = tip.head<2>() + r * (std::sin(phi) * u + std::cos(phi) * v);
+      points.emplace_back(p.x(), p.y(), below);
+    }
+  }
+  const std::unique_ptr<MaterialReader> reader = stock.materialReader(afterStep);
+  out.onMaterial = reader->read(points);
+  return out;
+}
+
 EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
                                  const Eigen::Vector3d& tip, const Eigen::Vector2d& feedDir,
                                  bool clockwise, double zTop, double curvature,

@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 namespace engage {
@@ -54,6 +55,25 @@ struct EdgeEngagement {
   double curvature = 0.0;
   bool any() const { return !slices.empty(); }
 };
+
+/// The cutter's flat end face on material: where material lies just below the face, which is
+/// where the face cuts when the step descends (a plunge, a ramp, a helix). Rings of the face
+/// from the axis out to its flat radius, each sampled at `angles` immersion angles in the
+/// EdgeEngagement frame (phi_k = (k + 1/2) 2 pi / angles).
+struct FaceContact {
+  double radius = 0.0;  ///< the flat end's radius, mm (0: the cutter has none)
+  int rings = 0, angles = 0;
+  std::vector<std::uint8_t> onMaterial;  ///< rings x angles, ring by ring
+  Eigen::Vector2d feed{1.0, 0.0}, side{0.0, 1.0};
+  bool any() const;
+};
+
+/// Measure the end face of `cutter` with its tip at `tip`, in the stock as after step
+/// `afterStep` (as measureEngagement; `feed` may be zero: a plunge's frame is +X): 8 rings, 72
+/// angles (5 degrees), each point read a tenth of a cell below the face.
+FaceContact measureFace(const Stock& stock, const AptCutter& cutter, const Eigen::Vector3d& tip,
+                        const Eigen::Vector2d& feed, bool clockwise,
+                        std::size_t afterStep = Stock::kLatest);
 
 /// Measure the contact of `cutter` with its tip at `tip`, moving horizontally along `feed`
 /// (any length, not zero), spinning clockwise seen from above (M3) or not (M4), up to `zTop`

@@ -372,6 +372,21 @@ std::string summaryJson(const RunResult& result) {
   return j.dump(2) + "\n";
 }
 
+namespace {
+
+/// Line numbers, sorted, each once: "4, 6, 9" (the first eight, then "and N more").
+std::string lineList(std::vector<int> lines) {
+  std::sort(lines.begin(), lines.end());
+  lines.erase(std::unique(lines.begin(), lines.end()), lines.end());
+  std::string named;
+  for (std::size_t i = 0; i < lines.size() && i < 8; ++i)
+    named += (i ? ", " : "") + std::to_string(lines[i]);
+  if (lines.size() > 8) named += " and " + std::to_string(lines.size() - 8) + " more";
+  return named;
+}
+
+}  // namespace
+
 std::string unmetLimits(const RunResult& result) {
   const Schedule& plan = result.plan;
   const UnitSystem sys = result.job.units;
@@ -396,12 +411,7 @@ std::string unmetLimits(const RunResult& result) {
       if (!worst || u.load > worst->load) worst = &u;
     }
     if (!worst) continue;
-    std::sort(lines.begin(), lines.end());
-    lines.erase(std::unique(lines.begin(), lines.end()), lines.end());
-    std::string named;
-    for (std::size_t i = 0; i < lines.size() && i < 8; ++i)
-      named += (i ? ", " : "") + std::to_string(lines[i]);
-    if (lines.size() > 8) named += " and " + std::to_string(lines.size() - 8) + " more";
+    const std::string named = lineList(lines);
     if (!text.empty()) text += "; ";
     text += std::string(k.option) + " " + formatQuantity(worst->value, k.dimension, sys) +
             " cannot be met on " + std::to_string(steps) + " step(s) of line(s) " + named +
@@ -491,8 +501,9 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
     w.push_back("stock.stl has " + std::to_string(written.openEdges) + " open edges");
   if (result.sim.plungeSteps > 0)
     w.push_back(std::to_string(result.sim.plungeSteps) +
-                " cutting step(s) plunge straight down: the force model covers the flutes' "
-                "sides, not the end face; their chip and forces are left empty (NaN)");
+                " cutting step(s) plunge straight down with a cutter whose end is not flat (a "
+                "ball's or a cone's point): the force model does not cover that cut; their chip "
+                "and forces are left empty (NaN)");
   for (const LimitCheck& c : result.verified.checks)
     if (!c.holds)
       w.push_back("the re-fed program, re-simulated, exceeds " + c.option + " " +
@@ -507,18 +518,12 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
       if (result.plan.binding[i] == Binding::Unmodelled &&
           (lines.empty() || lines.back() != result.sim.steps[i].line))
         lines.push_back(result.sim.steps[i].line);
-    std::sort(lines.begin(), lines.end());
-    lines.erase(std::unique(lines.begin(), lines.end()), lines.end());
-    if (!lines.empty()) {
-      std::string named;
-      for (std::size_t i = 0; i < lines.size() && i < 8; ++i)
-        named += (i ? ", " : "") + std::to_string(lines[i]);
-      if (lines.size() > 8) named += " and " + std::to_string(lines.size() - 8) + " more";
+    if (!lines.empty())
       w.push_back(
-          "the force model does not cover the end face's cut on plunges, ramps and helices: "
-          "their feeds were kept at most as programmed (line(s) " +
-          named + ")");
-    }
+          "the force model does not cover what a ball's, a cone's or a corner radius's end cuts "
+          "where the tool descends (plunges, ramps, helices), nor a stopped spindle: those "
+          "feeds were kept at most as programmed (line(s) " +
+          lineList(lines) + ")");
   }
   if (result.sim.stoppedSteps > 0)
     w.push_back(std::to_string(result.sim.stoppedSteps) +

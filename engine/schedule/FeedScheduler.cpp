@@ -357,8 +357,8 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
       }
     }
     // Plunges (no horizontal motion) load the cutter's end, not its flank: never faster
-    // than programmed. Under a physics limit no step that descends is (ramps, helices: the
-    // end face cuts, which the force model leaves out).
+    // than programmed. Under a physics limit neither is a step that descends where the end's
+    // cut is not modelled (a ball's, a cone's or a corner radius's: StepLoad::endFace).
     const Move& m = path.moves[s.move];
     const bool plunge =
         m.kind == MoveKind::Line && (m.end.head<2>() - m.start.head<2>()).norm() < 1e-9;
@@ -366,7 +366,7 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
       f = s.feed;
       out.binding[i] = Binding::Plunge;
     }
-    if (physics && m.end.z() < m.start.z() - 1e-9 && f > s.feed) {
+    if (physics && m.end.z() < m.start.z() - 1e-9 && !sim.loads[i].endFace && f > s.feed) {
       f = s.feed;
       out.binding[i] = Binding::Unmodelled;
     }

@@ -74,8 +74,8 @@ double mrrForForce(double force, double specificEnergy, double diameter, double 
 /// target from (a drill): its steps keep their programmed feeds. Chip, Force, Torque, Power:
 /// that physics limit (ScheduleOptions::maxChip ...) allows less than the MRR target (or, with
 /// no MRR target, less than the other limits). Unmodelled: under a physics limit, a step whose
-/// load the force model does not cover (a plunge, a ramp or a helix, where the end face cuts; a
-/// stopped spindle): never faster than programmed.
+/// load the force model does not cover (a ball's, a cone's or a corner radius's end cutting
+/// where the step descends; a stopped spindle): never faster than programmed.
 enum class Binding {
   None,
   FeedMin,

@@ -242,13 +242,15 @@ bool retractsFromCut(const std::vector<Planned>& plan, const Toolpath& path, std
 }
 
 /// The contact of one cutting step at its end (engine/physics/Engagement.h), measured once for
-/// the step's width, depth, angles and load: none for a rapid, a step in air, or one without
-/// horizontal motion (a plunge). The spindle's direction from the move, else `spindleRpm`
-/// (clockwise when neither says).
+/// the step's width, depth, angles and load: none for a rapid or a step in air; the edges'
+/// where it moves horizontally, the end face's where it descends. The spindle's direction from
+/// the move, else `spindleRpm` (clockwise when neither says).
 struct StepContact {
   bool cutting = false;  ///< not a rapid, and removed more than air's rounding
   EdgeEngagement edge;
+  FaceContact face;         ///< where the step descends
   double horizontal = 0.0;  ///< the horizontal share of the step's direction at its end
+  double descent = 0.0;     ///< the downward share of it (0 where it keeps height or rises)
   double rpm = 0.0;         ///< the spindle speed the step runs at (0: stopped or unknown)
 };
 
@@ -262,7 +264,10 @@ StepContact measureContact(const Move& m, const StepPath& sp, const Removal& rem
   // The direction at the step's end, and how much of it is horizontal.
   const Eigen::Vector3d d = sp.end - sp.at(std::max(0.0, 1.0 - 1e-3));
   c.horizontal = d.norm() > 0.0 ? d.head<2>().norm() / d.norm() : 0.0;
+  c.descent = d.norm() > 0.0 ? std::max(0.0, -d.z() / d.norm()) : 0.0;
   c.rpm = m.spindleRpm != 0.0 ? m.spindleRpm : spindleRpm;
+  if (c.descent > 1e-3)
+    c.face = measureFace(stock, cutter, sp.end, d.head<2>(), c.rpm >= 0.0, afterStep);
   if (c.horizontal < 1e-3) return c;
   c.edge = measureEngagement(stock, cutter, sp.end, d.head<2>(), c.rpm >= 0.0,
                              std::min(cutter.height(), rem.top + h), curvatureOf(m), afterStep);
@@ -276,13 +281,22 @@ StepLoad stepLoad(const PhysicsOptions& o, const StepRecord& r, const StepContac
   load.exponent = o.material.exponent();
   load.entry = load.exit = kNaN;
   if (!c.cutting) return load;
-  if (c.horizontal < 1e-3 || c.rpm == 0.0) {
-    ++(c.horizontal < 1e-3 ? out.plungeSteps : out.stoppedSteps);
+  // A plunge of a cutter without a flat end (a ball's or a cone's point): not modelled.
+  const bool face = c.face.radius > 0.0;
+  if ((c.horizontal < 1e-3 && !face) || c.rpm == 0.0) {
+    ++(c.rpm == 0.0 ? out.stoppedSteps : out.plungeSteps);
     return unmodelledLoad();
   }
   const int flutes = cutter.fluteCount();
-  const double fz = r.feed / (std::abs(c.rpm) * flutes) * c.horizontal;
-  return cuttingLoad(c.edge, o.material, {flutes, o.helix, cutter.maxRadius()}, fz, c.rpm);
+  const double perTooth = r.feed / (std::abs(c.rpm) * flutes);
+  const double fz = c.horizontal < 1e-3 ? 0.0 : perTooth * c.horizontal;
+  StepLoad l = cuttingLoad(c.edge, o.material, {flutes, o.helix, cutter.maxRadius()}, fz, c.rpm,
+                           {&c.face, perTooth * c.descent});
+  // The end's cut is whole only where the face is flat out to the side: a corner radius
+  // descending cuts with the axial feed too, unmodelled.
+  const AptParameters& ap = cutter.parameters();
+  l.endFace = l.endFace && ap.cornerRadius == 0.0 && ap.bottomAngleRad == 0.0;
+  return l;
 }
 
 /// Each tool's non-cutting parts (shank, holder), each with its shape a cell slimmer.

@@ -166,7 +166,8 @@ struct SimulationResult {
   /// rapids and air; NaN where the model does not apply: plunges, which load the end face,
   /// and cuts with the spindle stopped).
   std::vector<StepLoad> loads;
-  std::size_t plungeSteps = 0;   ///< cutting steps without horizontal motion (no load model)
+  /// Cutting steps without horizontal motion of a cutter without a flat end (no load model).
+  std::size_t plungeSteps = 0;
   std::size_t stoppedSteps = 0;  ///< cutting steps with no spindle speed (no load model)
 };
 

@@ -54,11 +54,12 @@ SimulationResult straightRun(int count, double feed, const std::function<double(
   return sim;
 }
 
-/// A 6 mm, 3-flute flat end mill slotting 2 mm deep along X (60 mm) at 600 mm/min and 10000
-/// rpm in Al 7075 (f_z = 0.02 mm), no helix: the program written into `dir`.
+/// A 6 mm, 3-flute flat end mill slotting 2 mm deep along X (entering from the side, to X60)
+/// at 600 mm/min and 10000 rpm in Al 7075 (f_z = 0.02 mm), no helix: the program written into
+/// `dir`. (No plunge: the end face's thrust there exceeds these tests' limits at any feed.)
 OptionValues loadedSlotJob(const test::TempFolder& dir) {
   const std::string program =
-      dir.write("slot.ngc", "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z-2 F100\nG1 X60 F600\nG0 Z5\nM2\n");
+      dir.write("slot.ngc", "G21 G90 G17\nG0 X-15 Y0 Z5\nG0 Z-2\nG1 X60 F600\nG0 Z5\nM2\n");
   return {{"program", program},
           {"tool", "flat"},
           {"diameter", "6mm"},
@@ -536,6 +537,13 @@ TEST_CASE("under a load limit a descending step is never fed faster than program
     CHECK(level.feed[i] > 150.0);  // the levels 100 x 1.05^k below 200
   }
   CHECK(ramp.unmet.empty());
+  // Where the load holds the end face's cut (a flat end mill's ramp), the ramp rises too.
+  SimulationResult modelled = loadedRun(1, 3);
+  for (StepLoad& l : modelled.loads)
+    l.endFace = true;
+  const Schedule faced = scheduleFeeds(path, modelled, o);
+  for (std::size_t i = 0; i < 10; ++i)
+    CHECK(faced.feed[i] > 150.0);
 }
 
 TEST_CASE("a load limit below what the lowest feed gives is reported, with that load",
