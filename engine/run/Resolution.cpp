@@ -104,7 +104,9 @@ CellChoice defaultCell(const Toolpath& path, const CutterSet& cutters,
     choice.limit = memory(fine) > kStockBudgetBytes ? CellLimit::Memory : CellLimit::Steps;
     return choice;
   }
-  for (int i = 0; i < 40; ++i) {
+  // Halving the logarithm of their ratio: 24 halvings leave the cell within 1e-6 (relative)
+  // of the smallest that fits for ratios up to 1e6.
+  for (int i = 0; i < 24; ++i) {
     const double mid = std::sqrt(lo * hi);
     (fits(mid) ? hi : lo) = mid;
   }
@@ -123,11 +125,18 @@ std::string describeCell(const CellChoice& choice, UnitSystem units) {
     case CellLimit::Engaged:
       return length(choice.cell) + ": a twentieth of " + engaged;
     case CellLimit::Memory:
-      return length(choice.cell) + ": the finest whose stock fits 2 GB; a twentieth of " + engaged +
-             " would be " + length(e.engaged / 20.0);
-    case CellLimit::Steps:
-      return length(choice.cell) + ": the finest that keeps the run within 1000000 steps; a " +
-             "twentieth of " + engaged + " would be " + length(e.engaged / 20.0);
+    case CellLimit::Steps: {
+      const bool memory = choice.limit == CellLimit::Memory;
+      // Even the nominal D/20 may be beyond the budget: then it stays.
+      const std::string finest =
+          choice.cell >= e.nominal / 20.0
+              ? std::string("a twentieth of the nominal diameter (no finer cell keeps ") +
+                    (memory ? "the stock within 2 GB)" : "the run within 1000000 steps)")
+              : std::string("the finest ") +
+                    (memory ? "whose stock fits 2 GB" : "that keeps the run within 1000000 steps");
+      return length(choice.cell) + ": " + finest + "; a twentieth of " + engaged + " would be " +
+             length(e.engaged / 20.0);
+    }
     case CellLimit::Nominal:
       break;
   }

@@ -100,6 +100,17 @@ TEST_CASE("the default cell: a twentieth of the engaged diameter, within the bud
     CHECK(DexelStock::memoryBound(b, c.cell) <= kStockBudgetBytes);
     CHECK(DexelStock::memoryBound(b, c.cell * 0.999) > kStockBudgetBytes);
   }
+  SECTION("a stock too large even for D/20: the nominal cell, and the reason says so") {
+    // 5 m square at 0.159 mm: 1e9 rays, 63 GB; the stock's own check refuses it later.
+    const CellChoice c = defaultCell(grooveToolpath(0.07, 10.0), single(vbit),
+                                     box(-2500, -2500, -10, 2500, 2500, 0), kDexel, 0.0);
+    CHECK(c.limit == CellLimit::Memory);
+    CHECK(c.cell == Approx(3.175 / 20.0).margin(1e-12));
+    CHECK_THAT(
+        describeCell(c, UnitSystem::Metric),
+        Catch::Matchers::Contains(
+            "a twentieth of the nominal diameter (no finer cell keeps the stock within 2 GB)"));
+  }
   SECTION("a long program: the finest cell that keeps it within a million steps") {
     // 1000 passes of 20 mm: 20 m at steps of 2.5 cells is 1e6 steps at 0.008 mm (the moves'
     // rounding up to whole steps and the plunge and retract add under 0.3 %).
