@@ -243,8 +243,9 @@ bool retractsFromCut(const std::vector<Planned>& plan, const Toolpath& path, std
 
 /// The contact of one cutting step at its end (engine/physics/Engagement.h), measured once for
 /// the step's width, depth, angles and load: none for a rapid or a step in air; the edges'
-/// where it moves horizontally, the end face's where it descends. The spindle's direction from
-/// the move, else `spindleRpm` (clockwise when neither says).
+/// where it moves horizontally, the end face's where it descends (with `physics`: only the
+/// load reads it). The spindle's direction from the move, else `spindleRpm` (clockwise when
+/// neither says).
 struct StepContact {
   bool cutting = false;  ///< not a rapid, and removed more than air's rounding
   EdgeEngagement edge;
@@ -256,7 +257,7 @@ struct StepContact {
 
 StepContact measureContact(const Move& m, const StepPath& sp, const Removal& rem,
                            const AptCutter& cutter, const Stock& stock, double spindleRpm,
-                           std::size_t afterStep) {
+                           std::size_t afterStep, bool physics) {
   StepContact c;
   const double h = stock.resolution();
   c.cutting = m.kind != MoveKind::Rapid && rem.volume > kAirVoxels * h * h * h;
@@ -266,7 +267,7 @@ StepContact measureContact(const Move& m, const StepPath& sp, const Removal& rem
   c.horizontal = d.norm() > 0.0 ? d.head<2>().norm() / d.norm() : 0.0;
   c.descent = d.norm() > 0.0 ? std::max(0.0, -d.z() / d.norm()) : 0.0;
   c.rpm = m.spindleRpm != 0.0 ? m.spindleRpm : spindleRpm;
-  if (c.descent > 1e-3)
+  if (physics && c.descent > 1e-3)  // (only the load needs it)
     c.face = measureFace(stock, cutter, sp.end, d.head<2>(), c.rpm >= 0.0, afterStep);
   if (c.horizontal < 1e-3) return c;
   c.edge = measureEngagement(stock, cutter, sp.end, d.head<2>(), c.rpm >= 0.0,
@@ -493,7 +494,8 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       const Move& m = path.moves[plan[first + k].move];
       contacts[k] = measureContact(
           m, batch[k].sp, removals[static_cast<std::size_t>(batch[k].cut)], cutters.of(m.tool),
-          stock, spindleRpm, batches ? static_cast<std::size_t>(batch[k].cut) : Stock::kLatest);
+          stock, spindleRpm, batches ? static_cast<std::size_t>(batch[k].cut) : Stock::kLatest,
+          options.physics.has_value());
     };
     if (batch.size() > 1)
       tbb::parallel_for(std::size_t(0), batch.size(), measure);
