@@ -60,7 +60,7 @@ struct ScheduleOptions {
 
 /// Without --feed-min, the lowest feed a step may get: this share of its programmed feed. A
 /// limit that needs less is not met (Schedule::unmet), rather than met by a program that
-/// crawls (a force limit below a cut's edge forces asked for 1 mm/min and 3.7 hours).
+/// crawls (a force limit below a cut's edge forces is met at no feed at all).
 constexpr double kFeedMinShare = 0.1;
 
 /// The MRR that keeps the tangential cutting force at `force` (N), paper Eq 17-18 inverted:
