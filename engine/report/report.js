@@ -297,6 +297,31 @@
                                         c.first_step + '–' + c.last_step, num(p + 'volume', U.volume)];
                               })));
     }
+    if (S.schedule) {
+      var sc = section('Schedule: what bound the feed, line by line', 'schedule');
+      var v = S.schedule.verified;
+      if (v && v.checks && v.checks.length)
+        sc.appendChild(tableOf(['limit (re-fed program re-simulated)', 'worst step', 'at re-fed line', 'limit', 'holds'],
+                               v.checks.map(function (c, i) {
+                                 var p = 'schedule.verified.checks.' + i + '.';
+                                 return [c.option, num(p + 'worst', pretty(c.unit)), num(p + 'line'),
+                                         num(p + 'limit', pretty(c.unit)), c.holds ? 'yes' : 'NO'];
+                               })));
+      if (S.schedule.lines && S.schedule.lines.length) {
+        sc.appendChild(tableOf(['line', 'programmed feed', 'scheduled, lowest', 'highest', 'bound by (steps)'],
+                               S.schedule.lines.map(function (l, i) {
+                                 var p = 'schedule.lines.' + i + '.';
+                                 var src = (data.sources || [])[l.file] || '';
+                                 return [(l.file ? src.split('/').pop() + ':' : '') + l.line,
+                                         num(p + 'feed_programmed', U.feed), num(p + 'feed_lowest', U.feed),
+                                         num(p + 'feed_highest', U.feed),
+                                         l.bound_by.map(function (b) { return b.limit + ' (' + b.steps + ')'; }).join(', ')];
+                               })));
+        if (S.schedule.lines_count > S.schedule.lines.length)
+          sc.appendChild(el('p', {class: 'note'}, 'the first ', String(S.schedule.lines.length), ' of ',
+                            String(S.schedule.lines_count), ' lines; steps.csv has every step\'s binding'));
+      }
+    }
     if (S.agreement_exact) {
       var a = section('Measured against the analytic model (steady-state steps)');
       var pc = function (p) { return num(p, '%', null, 100); };

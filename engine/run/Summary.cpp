@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -62,6 +63,66 @@ ordered_json crossCheckJson(const RunResult& result) {
           {"run_time_" + other + "_s", c.other.seconds},
           {"memory_bytes_" + other, c.otherMemoryBytes},
           {"largest_differences", places}};
+}
+
+/// Per source line whose feed the schedule changed or held: its programmed feed, the
+/// scheduled feeds' range and what bound them (binding names, most steps first).
+struct LineFeeds {
+  int file = 0, line = 0;
+  double programmed = 0.0, lowest = 0.0, highest = 0.0;
+  std::map<std::string, std::size_t> bound;
+};
+
+std::vector<LineFeeds> scheduledLines(const RunResult& result) {
+  const auto& steps = result.sim.steps;
+  const Schedule& plan = result.plan;
+  std::map<std::pair<int, int>, LineFeeds> lines;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const StepRecord& s = steps[i];
+    if (s.kind == MoveKind::Rapid || !(s.feed > 0.0) || i >= plan.feed.size()) continue;
+    const int file = result.job.path.moves[s.move].file;
+    auto [it, fresh] = lines.try_emplace({file, s.line});
+    LineFeeds& l = it->second;
+    if (fresh) {
+      l.file = file;
+      l.line = s.line;
+      l.programmed = s.feed;
+      l.lowest = l.highest = plan.feed[i];
+    }
+    l.lowest = std::min(l.lowest, plan.feed[i]);
+    l.highest = std::max(l.highest, plan.feed[i]);
+    if (plan.binding[i] != Binding::None) ++l.bound[bindingName(plan.binding[i])];
+  }
+  std::vector<LineFeeds> out;
+  for (auto& [key, l] : lines)
+    if (!l.bound.empty() || l.lowest != l.programmed || l.highest != l.programmed)
+      out.push_back(std::move(l));
+  return out;
+}
+
+/// The first 200 of scheduledLines (summary.json stays small on long programs).
+ordered_json linesJson(const RunResult& result, const std::vector<LineFeeds>& lines) {
+  const UnitSystem sys = result.job.units;
+  ordered_json out = ordered_json::array();
+  for (const LineFeeds& l : lines) {
+    if (out.size() >= 200) break;
+    std::vector<std::pair<std::size_t, std::string>> by;
+    for (const auto& [name, count] : l.bound)
+      by.emplace_back(count, name);
+    std::sort(by.begin(), by.end(), [](const auto& a, const auto& b) {
+      return a.first != b.first ? a.first > b.first : a.second < b.second;
+    });
+    ordered_json bound = ordered_json::array();
+    for (const auto& [count, name] : by)
+      bound.push_back({{"limit", name}, {"steps", count}});
+    out.push_back({{"file", l.file},
+                   {"line", l.line},
+                   {"feed_programmed", toDisplay(l.programmed, Dimension::Feed, sys)},
+                   {"feed_lowest", toDisplay(l.lowest, Dimension::Feed, sys)},
+                   {"feed_highest", toDisplay(l.highest, Dimension::Feed, sys)},
+                   {"bound_by", bound}});
+  }
+  return out;
 }
 
 /// The re-simulated re-fed program's checks (null without a stock).
@@ -121,6 +182,7 @@ ordered_json scheduleJson(const RunResult& result) {
   if (sched.maxTorque > 0)
     limits["max_torque"] = toDisplay(sched.maxTorque, Dimension::Torque, sys);
   if (sched.maxPower > 0) limits["max_power"] = toDisplay(sched.maxPower, Dimension::Power, sys);
+  const std::vector<LineFeeds> lines = scheduledLines(result);
   return {{"target_mrr", plan.targetMrr > 0 ? ordered_json(rate(plan.targetMrr)) : nullptr},
           {"physics_limits", limits},
           {"acceleration_limit", num(toDisplay(sched.acceleration, Dimension::Acceleration, sys))},
@@ -140,6 +202,8 @@ ordered_json scheduleJson(const RunResult& result) {
           {"feed_pieces", plan.fWords},
           {"steps_limited", counts},
           {"limited_places", places},
+          {"lines", linesJson(result, lines)},
+          {"lines_count", lines.size()},
           {"verified", verificationJson(result)}};
 }
 

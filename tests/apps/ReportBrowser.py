@@ -220,7 +220,8 @@ run(["schedule", fig9, "--tool", "flat", "--diameter", "6mm", "--stock", "box:-3
 path = check_run(out, fig9, 6, True,
                  ["removed", "peak_mrr.value", "peak_mrr.line", "schedule.cycle_time_before_s",
                   "schedule.cycle_time_after_s", "physics.peaks.f_peak.value",
-                  "agreement_exact.straight.mean_relative", "collisions.count"])
+                  "agreement_exact.straight.mean_relative", "collisions.count",
+                  "schedule.verified.checks.0.worst", "schedule.lines.0.feed_lowest"])
 check_screenshot(path, path)
 
 # An inch program on the dexel stock: in inches, the 3D view from the dexels.
