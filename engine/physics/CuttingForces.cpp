@@ -109,6 +109,15 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
   // Mean per revolution: N teeth each sweeping the arcs once in 2 pi.
   Eigen::Vector3d force(0.0, 0.0, 0.0);
   double torqueCut = 0.0, torqueEdge = 0.0, hArea = 0.0, area = 0.0;
+  // An element of weight w (length x angle) at radius r cutting a chip h.
+  auto addMean = [&](double w, double r, double h, const ElementForce& f, const Directions& d) {
+    force += w * ((f.cut[0] + f.edge[0]) * d.t + (f.cut[1] + f.edge[1]) * d.r +
+                  (f.cut[2] + f.edge[2]) * d.a);
+    torqueCut += w * f.cut[0] * r;
+    torqueEdge += w * f.edge[0] * r;
+    hArea += w * h;
+    area += w;
+  };
   // The end face: each ring's samples on material, an element dr x dphi each (the frame is
   // the edges' when they are in contact; a plunge's is the face's own).
   const double faceDr = fc ? fc->radius / fc->rings : 0.0;
@@ -126,16 +135,7 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
       const double r = (i + 0.5) * faceDr;
       for (int k = 0; k < fc->angles; ++k) {
         if (!fc->onMaterial[static_cast<std::size_t>(i * fc->angles + k)]) continue;
-        const double phi = (k + 0.5) * faceDphi;
-        const double w = faceDr * faceDphi;
-        const Directions d = directions(phi, 0.0);
-        const ElementForce& f = faceForce;
-        force += w * ((f.cut[0] + f.edge[0]) * d.t + (f.cut[1] + f.edge[1]) * d.r +
-                      (f.cut[2] + f.edge[2]) * d.a);
-        torqueCut += w * f.cut[0] * r;
-        torqueEdge += w * f.edge[0] * r;
-        hArea += w * face.fa;
-        area += w;
+        addMean(faceDr * faceDphi, r, face.fa, faceForce, directions((k + 0.5) * faceDphi, 0.0));
       }
     }
   }
@@ -153,14 +153,7 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
         const double phi = mid + half * g.x[q];
         const double w = half * g.w[q] * db;
         const double h = fz * std::max(0.0, std::sin(phi)) * sk;
-        const ElementForce f = element(material, h);
-        const Directions d = directions(phi, s.kappa);
-        force += w * ((f.cut[0] + f.edge[0]) * d.t + (f.cut[1] + f.edge[1]) * d.r +
-                      (f.cut[2] + f.edge[2]) * d.a);
-        torqueCut += w * f.cut[0] * s.radius;
-        torqueEdge += w * f.edge[0] * s.radius;
-        hArea += w * h;
-        area += w;
+        addMean(w, s.radius, h, element(material, h), directions(phi, s.kappa));
       }
     }
   }
@@ -181,6 +174,13 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
   const double lagPerMm = std::tan(teeth.helix) / std::max(teeth.radius, 1e-9);
   struct Sample {
     Eigen::Vector3d t{0, 0, 0}, r{0, 0, 0}, a{0, 0, 0}, edge{0, 0, 0};
+    /// An element of length `len`.
+    void add(double len, const ElementForce& f, const Directions& d) {
+      t += len * f.cut[0] * d.t;
+      r += len * f.cut[1] * d.r;
+      a += len * f.cut[2] * d.a;
+      edge += len * (f.edge[0] * d.t + f.edge[1] * d.r + f.edge[2] * d.a);
+    }
   };
   std::vector<Sample> samples(kRotationSamples);
   for (int m = 0; m < kRotationSamples; ++m) {
@@ -194,12 +194,7 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
         if (phi < 0.0) phi += 2.0 * kPi;
         if (!engaged(s, phi)) continue;
         const double h = fz * std::max(0.0, std::sin(phi)) * sk;
-        const ElementForce f = element(material, h);
-        const Directions d = directions(phi, s.kappa);
-        sm.t += db * f.cut[0] * d.t;
-        sm.r += db * f.cut[1] * d.r;
-        sm.a += db * f.cut[2] * d.a;
-        sm.edge += db * (f.edge[0] * d.t + f.edge[1] * d.r + f.edge[2] * d.a);
+        sm.add(db, element(material, h), directions(phi, s.kappa));
       }
     }
     // Each tooth's lip on the end face, along the radius at the tooth's angle.
@@ -207,14 +202,8 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
       for (int j = 0; j < N; ++j) {
         const double phi = std::fmod(theta + j * pitch, 2.0 * kPi);
         const Directions d = directions(phi, 0.0);
-        const ElementForce& f = faceForce;
-        for (int i = 0; i < fc->rings; ++i) {
-          if (!faceOn(i, phi)) continue;
-          sm.t += faceDr * f.cut[0] * d.t;
-          sm.r += faceDr * f.cut[1] * d.r;
-          sm.a += faceDr * f.cut[2] * d.a;
-          sm.edge += faceDr * (f.edge[0] * d.t + f.edge[1] * d.r + f.edge[2] * d.a);
-        }
+        for (int i = 0; i < fc->rings; ++i)
+          if (faceOn(i, phi)) sm.add(faceDr, faceForce, d);
       }
   }
   const bool linear = material.model == ForceModel::Linear;

@@ -59,8 +59,6 @@ double edgeOffset(double radius, double phi, const Eigen::Vector2d& feed,
 
 }  // namespace
 
-// One function: it runs for every cutting step, and its slices, angular samples, boundary
-// refinements and wall readings share one reader of the stock.
 bool FaceContact::any() const {
   return std::any_of(onMaterial.begin(), onMaterial.end(), [](std::uint8_t b) { return b != 0; });
 }
@@ -100,6 +98,8 @@ FaceContact measureFace(const Stock& stock, const AptCutter& cutter, const Eigen
   return out;
 }
 
+// One function: it runs for every cutting step, and its slices, angular samples, boundary
+// refinements and wall readings share one reader of the stock.
 EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
                                  const Eigen::Vector3d& tip, const Eigen::Vector2d& feedDir,
                                  bool clockwise, double zTop, double curvature,

@@ -97,9 +97,6 @@ Verification verifySchedule(const RunResult& r) {
   v.steps = sim.steps.size();
   v.removed = sim.removed;
   v.seconds = sim.seconds;
-  double programmedMax = 0.0;
-  for (const StepRecord& s : r.sim.steps)
-    programmedMax = std::max(programmedMax, s.feed);
   auto check = [&](const char* option, Dimension d, double limit, auto value) {
     if (!(limit > 0.0)) return;
     LimitCheck c{option, d, limit, 0.0, 0, true};
@@ -126,10 +123,9 @@ Verification verifySchedule(const RunResult& r) {
     check("--max-power", Dimension::Power, o.maxPower,
           [&](std::size_t i) { return sim.loads[i].power; });
   }
-  check("--feed-max", Dimension::Feed, o.feedMax > 0.0 ? o.feedMax : 2.0 * programmedMax,
-        [&](std::size_t i) {
-          return path.moves[sim.steps[i].move].fixedFeed() ? 0.0 : sim.steps[i].feed;
-        });
+  check("--feed-max", Dimension::Feed, r.plan.feedMax, [&](std::size_t i) {
+    return path.moves[sim.steps[i].move].fixedFeed() ? 0.0 : sim.steps[i].feed;
+  });
   return v;
 }
 

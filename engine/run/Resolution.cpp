@@ -33,15 +33,6 @@ double weightedMedian(std::vector<std::pair<double, double>> v) {
   return v.back().first;
 }
 
-double stepsAt(const Toolpath& path, double step) {
-  double steps = 0.0;
-  for (const Move& m : path.moves) {
-    const double len = moveLength(m);
-    if (len > 0.0) steps += std::max(1.0, std::ceil(len / step - 1e-9));
-  }
-  return steps;
-}
-
 }  // namespace
 
 ProgramEngagement programEngagement(const Toolpath& path, const CutterSet& cutters,
@@ -95,7 +86,7 @@ CellChoice defaultCell(const Toolpath& path, const CutterSet& cutters,
     return (models.voxel ? VoxelStock::memoryBound(*box, h) : 0.0) +
            (models.dexel ? DexelStock::memoryBound(*box, h) : 0.0);
   };
-  auto steps = [&](double h) { return fixedStep > 0.0 ? 0.0 : stepsAt(path, 2.5 * h); };
+  auto steps = [&](double h) { return fixedStep > 0.0 ? 0.0 : stepCount(path, 2.5 * h); };
   auto fits = [&](double h) { return memory(h) <= kStockBudgetBytes && steps(h) <= kStepBudget; };
   if (fits(fine)) return choice;
   double lo = fine, hi = nominal;  // lo does not fit; the cell is the smallest that does

@@ -476,6 +476,7 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   for (const StepRecord& s : st)
     programmedMax = std::max(programmedMax, s.feed);
   const double fMax = o.feedMax > 0.0 ? o.feedMax : 2.0 * programmedMax;
+  out.feedMax = fMax;
   if (o.feedMin > 0.0 && !(o.feedMin <= fMax))
     throw ParameterError(
         "--feed-min " + formatQuantity(o.feedMin, Dimension::Feed, UnitSystem::Metric) +

@@ -119,8 +119,9 @@ struct Schedule {
   double timeBefore = 0.0;        ///< feed-move time with the programmed feeds, s
   double timeAfter = 0.0;         ///< with the scheduled feeds, s
   double rapidTime = 0.0;  ///< rapids at ScheduleOptions::rapidFeed (the same before and after), s
-  double maxAcceleration = 0.0;   ///< largest |Eq 24 acceleration| between scheduled steps, mm/s^2
-  std::size_t fWords = 0;         ///< feed pieces in the plan
+  double maxAcceleration = 0.0;  ///< largest |Eq 24 acceleration| between scheduled steps, mm/s^2
+  std::size_t fWords = 0;        ///< feed pieces in the plan
+  double feedMax = 0.0;  ///< the highest feed it may command (--feed-max, else 2 x programmed)
   std::vector<UnmetLimit> unmet;  ///< the steps whose limit holds only below their lowest feed
 };
 

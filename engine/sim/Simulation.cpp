@@ -177,24 +177,32 @@ double CutterSet::smallestRadius() const {
   return r;
 }
 
+double stepCount(const Toolpath& path, double L) {
+  double steps = 0.0;
+  for (const Move& m : path.moves) {
+    const double len = moveLength(m);
+    if (len > 0.0) steps += std::max(1.0, std::ceil(len / L - 1e-9));
+  }
+  return steps;
+}
+
 void checkStepCount(const Toolpath& path, double L, std::size_t maxSteps) {
-  double steps = 0.0, longest = 0.0;
+  const double steps = stepCount(path, L);
+  if (!(steps > static_cast<double>(maxSteps))) return;
+  double longest = 0.0;
   const Move* longestMove = nullptr;
   for (const Move& m : path.moves) {
     const double len = moveLength(m);
-    if (!(len > 0.0)) continue;
-    steps += std::max(1.0, std::ceil(len / L - 1e-9));
     if (len > longest) {
       longest = len;
       longestMove = &m;
     }
   }
-  if (steps > static_cast<double>(maxSteps))
-    throw ParameterError(
-        "the program makes " + formatCount(steps) + " steps of at most " + formatCount(L) +
-        " mm, more than the limit of " + std::to_string(maxSteps) + " (--max-steps); its longest " +
-        "move, at line " + std::to_string(longestMove ? longestMove->line : 0) + ", is " +
-        formatCount(longest) + " mm long: check the program's units, or give a longer --step");
+  throw ParameterError(
+      "the program makes " + formatCount(steps) + " steps of at most " + formatCount(L) +
+      " mm, more than the limit of " + std::to_string(maxSteps) + " (--max-steps); its longest " +
+      "move, at line " + std::to_string(longestMove ? longestMove->line : 0) + ", is " +
+      formatCount(longest) + " mm long: check the program's units, or give a longer --step");
 }
 
 SimulationResult simulate(const Toolpath& path, const AptCutter& cutter, Stock& stock,

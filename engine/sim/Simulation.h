@@ -187,6 +187,10 @@ bool stopRequested() noexcept;
 /// `maxSteps` steps. Throws ParameterError naming the count and the longest move.
 void checkStepCount(const Toolpath& path, double stepLength, std::size_t maxSteps);
 
+/// The steps `path` makes at steps of at most `stepLength` (mm): each move of some length
+/// in whole steps, at least one.
+double stepCount(const Toolpath& path, double stepLength);
+
 /// Run a tool path through a stock, each step with the cutter of the tool in the spindle.
 /// Throws Error from the model or the stock.
 SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock& stock,
