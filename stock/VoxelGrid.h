@@ -35,9 +35,10 @@ constexpr int kLeafDim = static_cast<int>(Leaf::DIM);  // 8
 /// OpenVDB's initialize(), once per process.
 void initVdb();
 
-/// Refuse, before allocating, a grid whose voxels could not all be held (VoxelStock::memoryBound
-/// against three quarters of the physical memory). Throws ParameterError naming the voxel size.
-void checkMemory(const Box3& box, double h);
+/// Refuse, before allocating, a grid that could not be held where the cuts reach `reach`
+/// (VoxelStock::memoryBound against three quarters of the physical memory). Throws
+/// ParameterError naming the voxel size.
+void checkMemory(const Box3& box, double h, const std::vector<Box3>* reach = nullptr);
 
 /// Voxels of a grid of size h over `box`, with a voxel's margin on each side.
 double voxelCount(const Box3& box, double h);

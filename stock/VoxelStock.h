@@ -24,6 +24,7 @@
 #include "stock/Stock.h"
 #include "stock/TriangleMesh.h"
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -38,12 +39,20 @@ class VoxelStock : public Stock {
  public:
   /// A box of material (mm). Voxels that the box covers partly get their covered fraction.
   /// Throws ParameterError for an empty box, a non-positive voxel size, or a voxel size whose
-  /// grid would not fit in this machine's memory (checked before anything is allocated).
-  static VoxelStock box(const Box3& box, double voxelSize);
-  /// Bytes a box stock may come to hold at most, cut everywhere (every voxel in leaves, the
-  /// capture grids, the planes): what box() checks against this machine's memory, and what a
-  /// batch reserves for the job (engine/run/Batch.h).
-  static double memoryBound(const Box3& box, double voxelSize);
+  /// grid would not fit in this machine's memory where the cuts may reach (`reach`, as for
+  /// memoryBound; checked before anything is allocated).
+  static VoxelStock box(const Box3& box, double voxelSize,
+                        const std::vector<Box3>* reach = nullptr);
+  /// Bytes a box stock may come to hold at most when the cuts stay within the boxes `reach`
+  /// (mm; null: anywhere in the box): the leaves of the box's partly covered faces, and every
+  /// voxel of the leaves the cuts reach with its capture grids and planes. A sparse grid holds
+  /// only these: a V-bit's groove across a 91 x 54 mm plate needs the faces' leaves, not the
+  /// plate's 10^10 voxels. What box() checks against this machine's memory, what a batch
+  /// reserves for the job (engine/run/Batch.h) and what the default cell is held to
+  /// (engine/run/Resolution.h). Counting stops once the bytes exceed `stopAbove`.
+  static double memoryBound(const Box3& box, double voxelSize,
+                            const std::vector<Box3>* reach = nullptr,
+                            double stopAbove = std::numeric_limits<double>::infinity());
   /// Material inside a closed triangle mesh (STL, OBJ, PLY; read with OpenMesh). Throws
   /// Error for a missing or unreadable file, ParameterError for an open mesh (naming the
   /// number of boundary edges) or a voxel size that would not fit in memory.

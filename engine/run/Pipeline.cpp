@@ -6,6 +6,7 @@
 #include "cutters/Error.h"
 #include "engine/gcode/GcodeWriter.h"
 #include "engine/run/Output.h"
+#include "engine/run/Resolution.h"
 #include "stock/DexelStock.h"
 #include "stock/VoxelStock.h"
 
@@ -19,12 +20,19 @@
 namespace engage {
 namespace {
 
-/// A stock of the chosen model at resolution h (voxel size or ray spacing).
-std::unique_ptr<Stock> makeStock(const StockSpec& spec, StockModel model, double h) {
+/// The boxes a job's cuts reach in its box stock (a voxel stock holds leaves only there).
+std::vector<Box3> jobReach(const Job& job) {
+  return programReach(job.path, job.cutters, *job.stock.box);
+}
+
+/// A stock of the chosen model at resolution h (voxel size or ray spacing) for `job`'s cuts.
+std::unique_ptr<Stock> makeStock(const Job& job, StockModel model, double h) {
+  const StockSpec& spec = job.stock;
   const bool dexel = model == StockModel::Dexel;
   if (spec.box) {
     if (dexel) return std::make_unique<DexelStock>(DexelStock::box(*spec.box, h));
-    return std::make_unique<VoxelStock>(VoxelStock::box(*spec.box, h));
+    const std::vector<Box3> reach = jobReach(job);
+    return std::make_unique<VoxelStock>(VoxelStock::box(*spec.box, h, &reach));
   }
   if (!spec.vdb.empty()) {
     if (dexel) return std::make_unique<DexelStock>(VoxelStock::dexelsFromVdb(spec.vdb, h));
@@ -91,7 +99,7 @@ Verification verifySchedule(const RunResult& r) {
   const ScheduleOptions& o = job.schedule;
   Verification v;
   const Toolpath path = readProgramText(r.refed, job.mainProgram(), job.reader);
-  const std::unique_ptr<Stock> stock = makeStock(job.stock, job.stockModel, job.voxel);
+  const std::unique_ptr<Stock> stock = makeStock(job, job.stockModel, job.voxel);
   const SimulationResult sim = simulate(path, job.cutters, *stock, job.simulation);
   v.done = true;
   v.steps = sim.steps.size();
@@ -138,8 +146,8 @@ PreparedRun prepareStocks(Job job) {
   checkStepCount(job.path, job.stepLength(), job.simulation.maxSteps);
   PreparedRun run;
   if (!job.stock.none()) {
-    run.stock = makeStock(job.stock, job.stockModel, job.voxel);
-    if (job.crossCheck) run.other = makeStock(job.stock, job.otherModel(), job.voxel);
+    run.stock = makeStock(job, job.stockModel, job.voxel);
+    if (job.crossCheck) run.other = makeStock(job, job.otherModel(), job.voxel);
     checkReach(job, *run.stock);
     if (auto* v = dynamic_cast<VoxelStock*>(run.stock.get())) v->captureRemoved(true);
     if (auto* d = dynamic_cast<DexelStock*>(run.stock.get())) d->captureRemoved(true);
@@ -153,8 +161,9 @@ PreparedRun prepareStocks(Job job) {
 double memoryEstimate(const Job& job) {
   double bytes = 64e6;
   if (job.stock.box) {
+    const std::vector<Box3> reach = jobReach(job);
     auto one = [&](StockModel m) {
-      return m == StockModel::Voxel ? VoxelStock::memoryBound(*job.stock.box, job.voxel)
+      return m == StockModel::Voxel ? VoxelStock::memoryBound(*job.stock.box, job.voxel, &reach)
                                     : DexelStock::memoryBound(*job.stock.box, job.voxel) /
                                           DexelStock::kBytesPerRay * 1000.0;
     };

@@ -1,5 +1,6 @@
 #include "engine/run/Resolution.h"
 
+#include "cutters/Numbers.h"
 #include "stock/DexelStock.h"
 #include "stock/VoxelStock.h"
 
@@ -69,6 +70,50 @@ ProgramEngagement programEngagement(const Toolpath& path, const CutterSet& cutte
   return best;
 }
 
+std::vector<Box3> programReach(const Toolpath& path, const CutterSet& cutters, const Box3& stock) {
+  std::vector<Box3> reach;
+  const double top = stock.max.z();
+  for (const Move& m : path.moves) {
+    const AptCutter& c = cutters.of(m.tool);
+    const double length = moveLength(m);
+    const double lowest = lowestZ(m);
+    if (lowest >= top) continue;  // nothing of the tool below the top
+    // Pieces no longer than the tool is wide (nor shorter than a tenth of its diameter):
+    // their boxes stay close to the swept band.
+    const double pieceLength = std::max(2.0 * c.maxRadiusBelow(top - lowest), 0.2 * c.radius());
+    int n = static_cast<int>(std::ceil(length / pieceLength));
+    if (m.kind == MoveKind::Arc)
+      n = std::max(n, static_cast<int>(std::ceil(std::abs(arcSweep(m)) / (10.0 * kPi / 180.0))));
+    n = std::clamp(n, 1, 1 << 20);
+    // How far a piece's path may leave the box of its ends, per axis: an arc's sagitta in its
+    // plane; a spline's half piece.
+    Eigen::Vector3d bulge = Eigen::Vector3d::Zero();
+    if (m.kind == MoveKind::Arc) {
+      const double sagitta = arcRadius(m) * (1.0 - std::cos(0.5 * std::abs(arcSweep(m)) / n));
+      const PlaneAxes axes = planeAxes(m.plane);
+      bulge[axes.a] = bulge[axes.b] = sagitta;
+    } else if (m.kind == MoveKind::Spline) {
+      bulge.setConstant(0.5 * length / n);
+    }
+    Eigen::Vector3d a = m.start;
+    for (int k = 1; k <= n; ++k) {
+      const Eigen::Vector3d b = k == n ? m.end : pointAt(m, static_cast<double>(k) / n);
+      const double zLow = std::min(a.z(), b.z()) - bulge.z();
+      if (zLow < top) {
+        const double r = c.maxRadiusBelow(top - zLow);
+        const Eigen::Vector3d widen = bulge + Eigen::Vector3d(r, r, 0.0);
+        Box3 piece;
+        piece.min = (a.cwiseMin(b) - widen).cwiseMax(stock.min);
+        piece.max =
+            (a.cwiseMax(b) + widen + Eigen::Vector3d(0.0, 0.0, c.height())).cwiseMin(stock.max);
+        if ((piece.min.array() <= piece.max.array()).all()) reach.push_back(piece);
+      }
+      a = b;
+    }
+  }
+  return reach;
+}
+
 CellChoice defaultCell(const Toolpath& path, const CutterSet& cutters,
                        const std::optional<Box3>& box, StockModels models, double fixedStep) {
   CellChoice choice;
@@ -81,10 +126,14 @@ CellChoice defaultCell(const Toolpath& path, const CutterSet& cutters,
   choice.cell = choice.limit == CellLimit::Engaged ? fine : nominal;
   if (choice.limit == CellLimit::Nominal) return choice;
   // Coarser only as far as the budgets need: each bound shrinks as the cell grows.
+  const std::vector<Box3> reach =
+      box && models.voxel ? programReach(path, cutters, *box) : std::vector<Box3>{};
   auto memory = [&](double h) {
     if (!box) return 0.0;
-    return (models.voxel ? VoxelStock::memoryBound(*box, h) : 0.0) +
-           (models.dexel ? DexelStock::memoryBound(*box, h) : 0.0);
+    const double dexel = models.dexel ? DexelStock::memoryBound(*box, h) : 0.0;
+    const double left = kStockBudgetBytes - dexel;
+    return dexel +
+           (models.voxel && left >= 0.0 ? VoxelStock::memoryBound(*box, h, &reach, left) : 0.0);
   };
   auto steps = [&](double h) { return fixedStep > 0.0 ? 0.0 : stepCount(path, 2.5 * h); };
   auto fits = [&](double h) { return memory(h) <= kStockBudgetBytes && steps(h) <= kStepBudget; };

@@ -15,6 +15,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace engage {
 
@@ -54,6 +55,12 @@ constexpr double kStepBudget = 1e6;
 /// smallest such diameter. Without a cut below the top: the smallest cutter, nominal.
 ProgramEngagement programEngagement(const Toolpath& path, const CutterSet& cutters,
                                     std::optional<double> stockTop);
+
+/// Boxes (mm) that hold everything the program's tools sweep below the top of `stock`, clipped
+/// to it: each move in pieces no longer than the tool is wide there (arcs in pieces of at most
+/// 10 deg), each piece's box widened by the tool's radius at the piece's depth and reaching up
+/// to the stock's top. A sparse stock holds leaves only there (VoxelStock::memoryBound).
+std::vector<Box3> programReach(const Toolpath& path, const CutterSet& cutters, const Box3& stock);
 
 /// The stock models a job holds at once (its own, and the other one with --cross-check).
 struct StockModels {

@@ -47,6 +47,43 @@ TEST_CASE("a box stock holds exactly its volume, wherever its faces fall", "[sto
   CHECK_THROWS_WITH(VoxelStock::box(b, 0.25), Contains("stock box is empty along X"));
 }
 
+TEST_CASE("a box stock's memory bound counts its partial faces and the leaves the cuts reach",
+          "[stock]") {
+  // Voxels of 0.125 mm: leaves of 1 mm (8 voxels). Voxel i covers [(i - 1/2) h, (i + 1/2) h],
+  // so a face at (k + 1/2) h lies between voxels and one at k h halves them.
+  const double h = 0.125;
+  const double cutLeaf = 512 * 40.0;  // bytes a cut leaf holds (VoxelStock.cpp), by hand
+  const double faceLeaf = 2.5e3;      // bytes of a leaf of a partly covered face
+  Box3 onGrid;  // voxels 0 .. 76 along X and Y (leaves 0 .. 9: 10), -31 .. -1 along Z (4)
+  onGrid.min = {-0.5 * h, -0.5 * h, -31.5 * h};
+  onGrid.max = {9.5 + 0.5 * h, 9.5 + 0.5 * h, -0.5 * h};
+  SECTION("no cut, faces between voxels: nothing") {
+    const std::vector<Box3> none;
+    CHECK(VoxelStock::memoryBound(onGrid, h, &none) == 0.0);
+  }
+  SECTION("a cut: its leaves, widened by a voxel, once however often they are reached") {
+    // X 2.1 .. 3.9 mm and a voxel each side: voxels 16 .. 32, leaves 2 .. 4 (3); Y 5.05 ..
+    // 5.2: voxels 39 .. 43, leaves 4 and 5 (2); Z -1 .. 0: voxels -9 .. 1, within the box's
+    // -9 .. -1, leaves -2 and -1 (2).
+    Box3 cut;
+    cut.min = {2.1, 5.05, -1.0};
+    cut.max = {3.9, 5.2, 0.0};
+    const std::vector<Box3> reach{cut, cut};
+    CHECK(VoxelStock::memoryBound(onGrid, h, &reach) == Approx(3 * 2 * 2 * cutLeaf));
+    // Counting stops past `stopAbove`.
+    CHECK(VoxelStock::memoryBound(onGrid, h, &reach, cutLeaf) == Approx(2 * cutLeaf));
+  }
+  SECTION("a top face that halves its voxels: a layer of leaves over the whole top") {
+    Box3 b = onGrid;
+    b.max.z() = 0.0;
+    const std::vector<Box3> none;
+    CHECK(VoxelStock::memoryBound(b, h, &none) == Approx(10 * 10 * faceLeaf));
+  }
+  SECTION("without a reach, every voxel as if cut (the earlier bound, for meshes and files)") {
+    CHECK(VoxelStock::memoryBound(onGrid, h) > 80 * 80 * 32 * 40.0);
+  }
+}
+
 TEST_CASE("full slot at 30 deg: every step removes D x depth x L", "[stock]") {
   for (const AptCutter& c :
        {AptCutter::flat(6.0, 18.0), AptCutter::ball(6.0, 18.0), AptCutter::bull(6.0, 1.0, 18.0),

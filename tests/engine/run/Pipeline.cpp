@@ -393,8 +393,13 @@ TEST_CASE("a job's memory estimate follows its stock's closed-form bounds", "[ru
   OptionValues v = {{"program", program},     {"tool", "flat"},
                     {"diameter", "6mm"},      {"stock", "box:0,0,-10,10,10,0"},
                     {"stock-model", "voxel"}, {"voxel", "1mm"}};
-  // Voxels: (10 / 1 + 2)^3 = 1728 of at most 18 bytes with 10 % slack, on 64 MB for the rest.
-  const double voxels = 1728.0 * 18.0 * 1.1;
+  // Voxels (VoxelStock::memoryBound), on 64 MB for the rest. The box's faces fall halfway
+  // through voxels (centred on whole mm): X and Y hold voxels 0 .. 10, leaves of 8 voxels 0 .. 1
+  // (2), Z -10 .. 0, leaves -2 .. 0 (3), so the faces take 2 (2 x 3) + 2 (3 x 2) + 2 (2 x 2) =
+  // 32 leaves of 2.5 kB. The slot (D 6 along Y 0, 2 deep: Y 0 .. 3, Z -2 .. 0, a voxel beyond,
+  // within the box) reaches leaves 0 .. 1 along X, 0 along Y, -1 .. 0 along Z: 4 leaves of 512
+  // voxels of 40 bytes.
+  const double voxels = 32 * 2.5e3 + 4 * 512 * 40.0;
   CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) == Approx(64e6 + voxels));
   // Dexels: 10 x 10 rays of 1 kB each.
   v["stock-model"] = "dexel";

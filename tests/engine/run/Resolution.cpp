@@ -9,6 +9,7 @@
 #include "engine/run/Job.h"
 #include "engine/run/Pipeline.h"
 #include "stock/DexelStock.h"
+#include "stock/VoxelStock.h"
 #include "tests/engine/run/RunTestSupport.h"
 
 #include <catch2/catch.hpp>
@@ -100,6 +101,19 @@ TEST_CASE("the default cell: a twentieth of the engaged diameter, within the bud
     CHECK(DexelStock::memoryBound(b, c.cell) <= kStockBudgetBytes);
     CHECK(DexelStock::memoryBound(b, c.cell * 0.999) > kStockBudgetBytes);
   }
+  SECTION("a large plate in the voxel stock: held by its faces' leaves, not every voxel") {
+    // The groove's leaves are few; the plate's top, halfway through a layer of voxels, takes a
+    // layer of leaves (VoxelStock::memoryBound). Dense, every voxel counted, the cell was
+    // 0.047 mm: under two across the 0.081 mm groove.
+    const Box3 b = box(-2, -2, -2, 89, 52, 0);
+    const Toolpath path = grooveToolpath(0.07, 85.0);
+    const CellChoice c = defaultCell(path, single(vbit), b, StockModels{true, false}, 0.0);
+    CHECK(c.limit == CellLimit::Memory);
+    const std::vector<Box3> reach = programReach(path, single(vbit), b);
+    CHECK(VoxelStock::memoryBound(b, c.cell, &reach) <= kStockBudgetBytes);
+    CHECK(VoxelStock::memoryBound(b, c.cell * 0.999, &reach) > kStockBudgetBytes);
+    CHECK(c.cell < engaged / 5.0);  // five cells across the groove: no coarse-cell warning
+  }
   SECTION("a stock too large even for D/20: the nominal cell, and the reason says so") {
     // 5 m square at 0.159 mm: 1e9 rays, 63 GB; the stock's own check refuses it later.
     const CellChoice c = defaultCell(grooveToolpath(0.07, 10.0), single(vbit),
@@ -133,6 +147,50 @@ TEST_CASE("the default cell: a twentieth of the engaged diameter, within the bud
     CHECK(describeCell(c, UnitSystem::Metric) ==
           "0.00404145 mm: a twentieth of the 0.080829 mm the tool engages at 0.07 mm deep "
           "(nominal 3.175 mm)");
+  }
+}
+
+TEST_CASE("the program's reach holds every point its tools sweep below the stock's top", "[run]") {
+  // A 60 deg V-bit 0.07 mm deep sweeps a band r = 0.07 tan 30 deg either side of its path;
+  // points just inside that band, on a line, a diagonal and an arc, each lie in a reach box,
+  // and the boxes stay within the band widened by r (pieces no longer than a tenth of D).
+  const AptCutter vbit = AptCutter::chamfer(3.175, deg(60.0), 10.0);
+  const double r = 0.07 * std::tan(deg(30.0));
+  const Box3 stock = box(-20, -20, -1, 20, 20, 0);
+  const std::string text =
+      "G21 G90 G17\nG0 X0 Y0.3 Z1\nG1 Z-0.07 F100\nG1 X10 F600\nG1 X15 Y8\n"
+      "G3 X5 Y8 I-5 J0\nG0 Z1\nM2\n";
+  const std::vector<Box3> reach =
+      programReach(readProgramText(text, "reach.ngc"), single(vbit), stock);
+  REQUIRE(!reach.empty());
+  auto inside = [&](const Eigen::Vector3d& p) {
+    for (const Box3& b : reach)
+      if ((p.array() >= b.min.array()).all() && (p.array() <= b.max.array()).all()) return true;
+    return false;
+  };
+  int missed = 0;
+  for (int k = 0; k <= 200; ++k) {
+    const double t = k / 200.0;
+    const double a = kPi * t;  // the arc: centre (10, 8), radius 5, from 0 to 180 deg
+    const Eigen::Vector2d onLine(10.0 * t, 0.3), onDiagonal(10.0 + 5.0 * t, 0.3 + 7.7 * t);
+    const Eigen::Vector2d onArc(10.0 + 5.0 * std::cos(a), 8.0 + 5.0 * std::sin(a));
+    const Eigen::Vector2d across(0.0, 1.0), diagonalNormal(-7.7, 5.0),
+        radial(std::cos(a), std::sin(a));
+    for (const double side : {-0.999 * r, 0.999 * r})
+      for (const Eigen::Vector2d& p :
+           {Eigen::Vector2d(onLine + side * across),
+            Eigen::Vector2d(onDiagonal + side * diagonalNormal.normalized()),
+            Eigen::Vector2d(onArc + side * radial)})
+        missed += inside(Eigen::Vector3d(p.x(), p.y(), -0.069)) ? 0 : 1;
+  }
+  CHECK(missed == 0);
+  for (const Box3& b : reach) {
+    CHECK(b.min.z() >= -0.07 - 1e-9);  // nothing below the tip
+    CHECK(b.max.z() <= 0.0);           // nor above the stock's top
+    // A piece of at most a tenth of D (0.3175 mm) along the path, widened by r (and an arc
+    // piece's bulge, under 0.02 mm for 10 deg on radius 5).
+    CHECK(b.max.x() - b.min.x() <= 0.3175 + 2.0 * r + 0.04);
+    CHECK(b.max.y() - b.min.y() <= 0.3175 + 2.0 * r + 0.04);
   }
 }
 
