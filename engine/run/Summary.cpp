@@ -200,6 +200,7 @@ ordered_json scheduleJson(const RunResult& result) {
           {"mrr_peak_before", rate(peakBefore)},
           {"mrr_peak_after", rate(peakAfter)},
           {"feed_pieces", plan.fWords},
+          {"noise_relative", plan.noise},
           {"steps_limited", counts},
           {"limited_places", places},
           {"lines", linesJson(result, lines)},
@@ -706,11 +707,11 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
     appendf(
         report,
         "schedule: target %s, feed time %.1f s -> %.1f s (%.1f %% %s), largest acceleration %s, "
-        "%zu feed pieces\n",
+        "%zu feed pieces (the measurement's noise %.2f %%: no F word changes for less)\n",
         targets.c_str(), plan.timeBefore, plan.timeAfter,
         plan.timeBefore > 0 ? std::abs(100.0 * (1.0 - plan.timeAfter / plan.timeBefore)) : 0.0,
         plan.timeAfter <= plan.timeBefore ? "saved" : "longer",
-        q(plan.maxAcceleration, Dimension::Acceleration).c_str(), plan.fWords);
+        q(plan.maxAcceleration, Dimension::Acceleration).c_str(), plan.fWords, 100.0 * plan.noise);
   if (job.scheduling() && plan.rapidTime > 0.0)
     appendf(report, "cycle time with rapids: %.1f s -> %.1f s (rapids %.1f s)\n",
             plan.timeBefore + plan.rapidTime, plan.timeAfter + plan.rapidTime, plan.rapidTime);

@@ -101,11 +101,15 @@ void limitMotion(const SimulationResult& sim, std::vector<double>& feed, double 
 
 /// Round feeds down to the levels F (1 + q)^k of the step's programmed feed F (k an integer):
 /// the programmed feed is a level, so unchanged steps keep it, and any two levels of a move
-/// differ by at least the factor 1 + q. Hysteresis: a step keeps the previous step's level
-/// while that is at most q/2 above its own wanted feed, so that the noise of the measured MRR
-/// does not toggle F words. Levels below the step's floor are lifted to it.
+/// differ by at least the factor 1 + q. So that the measurement's noise does not toggle F
+/// words: a step keeps a lower previous level unless the feed the limits want for it
+/// (`wanted`, not lowered by the other rules) clears its own level by the noise (`noise`,
+/// relative; this only lowers feeds), and it keeps a higher previous level while that is at
+/// most `keep` above its feed (hysteresis; 0: none). Levels below the step's floor are lifted
+/// to it.
 void quantizeDown(const SimulationResult& sim, std::vector<double>& feed,
-                  const std::vector<double>& floor, double q, bool hysteresis) {
+                  const std::vector<double>& wanted, const std::vector<double>& floor, double q,
+                  double noise, double keep) {
   double previous = 0.0;
   for (std::size_t i = 0; i < feed.size(); ++i) {
     if (!isFeedStep(sim.steps[i])) {
@@ -114,13 +118,36 @@ void quantizeDown(const SimulationResult& sim, std::vector<double>& feed,
     }
     const double base = sim.steps[i].feed;
     const double k = std::floor(std::log(feed[i] / base) / std::log1p(q) + 1e-9);
-    double level =
-        std::max(std::min(feed[i], base * std::pow(1.0 + q, k)), std::min(floor[i], feed[i]));
-    if (hysteresis && previous > level && previous <= feed[i] * (1.0 + 0.5 * q)) level = previous;
+    const double lowest = std::min(floor[i], feed[i]);
+    double level = std::max(std::min(feed[i], base * std::pow(1.0 + q, k)), lowest);
+    if (previous > 0.0 && previous < level && wanted[i] < level * (1.0 + noise))
+      level = std::max(previous, lowest);
+    else if (previous > level && previous <= feed[i] * (1.0 + keep))
+      level = previous;
     feed[i] = level;
     previous = level;
   }
 }
+
+}  // namespace
+
+double loadNoise(const SimulationResult& sim, const std::vector<double>& wanted) {
+  const auto& st = sim.steps;
+  std::vector<double> deviation;
+  for (std::size_t i = 1; i + 1 < st.size(); ++i) {
+    const double a = wanted[i - 1], r = wanted[i], b = wanted[i + 1];
+    if (!isFeedStep(st[i]) || !(r > 0.0) || st[i - 1].move != st[i].move ||
+        st[i + 1].move != st[i].move || !steadyBetween(a, r, b))
+      continue;
+    deviation.push_back(std::abs(2.0 * r / (a + b) - 1.0));
+  }
+  if (deviation.size() < 20) return 0.0;
+  const auto at = deviation.begin() + static_cast<long>(99 * (deviation.size() - 1) / 100);
+  std::nth_element(deviation.begin(), at, deviation.end());
+  return *at;
+}
+
+namespace {
 
 /// Runs of one feed shorter than `minSegment` take the lower of their neighbours' feeds.
 void mergeShortRuns(const SimulationResult& sim, std::vector<double>& feed, double minSegment) {
@@ -413,11 +440,13 @@ void settleFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
   // Physics limits are maxima, not targets: no level may lift a feed above what they allow,
   // so the hysteresis pass is left out.
   out.feed = out.wanted;
+  out.noise = loadNoise(sim, out.wanted);
   for (const bool hysteresis : {true, false})
     for (int round = 0; (round < 50 && !physics) || !hysteresis; ++round) {
       const std::vector<double> before = out.feed;
       limitMotion(sim, out.feed, o.acceleration, o.jerk);
-      quantizeDown(sim, out.feed, floor, o.minChange, hysteresis);
+      quantizeDown(sim, out.feed, out.wanted, floor, o.minChange, physics ? out.noise : 0.0,
+                   hysteresis ? std::max(0.5 * o.minChange, out.noise) : 0.0);
       mergeShortRuns(sim, out.feed, o.minSegment);
       unify(out.feed);
       if (out.feed == before) break;

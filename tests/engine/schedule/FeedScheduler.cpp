@@ -607,3 +607,53 @@ TEST_CASE("every schedule re-simulates its re-fed program against each limit",
   CHECK_FALSE(unmet.verified.checks[0].holds);
   CHECK(unmet.verified.checks[0].worst > 78.0 * 1.01);
 }
+
+TEST_CASE("feeds do not chase the measurement's noise", "[schedule]") {
+  // 100 steps of 1 mm whose load alternates 1 + e and 1 - e times its mean (e = 0.008: each
+  // step within kSteadyChange of its neighbours, so the cut counts as steady). The wanted feed
+  // goes as 1 / (1 +- e); a step's relative difference from its neighbours' mean is then
+  // 2e / (1 + e) or 2e / (1 - e): the noise (the 99th percentile) is 2e / (1 - e) = 1.613 %.
+  // Levels 0.5 % apart (--min-change 0.005) would toggle on every step without a band.
+  const double e = 0.008;
+  const double noise = 2.0 * e / (1.0 - e);
+  const Toolpath path = readProgramText("G21 G90\nG1 X100 F1000\nM2\n", "line.ngc");
+  auto sign = [](int i) { return i % 2 == 0 ? 1.0 : -1.0; };
+  SECTION("an MRR target keeps a level while the noise alone would change it") {
+    const SimulationResult sim =
+        straightRun(100, 1000.0, [&](int i) { return 2000.0 * (1.0 + e * sign(i)); });
+    ScheduleOptions o;
+    o.targetMrr = 2000.0;
+    o.minChange = 0.005;
+    const Schedule sc = scheduleFeeds(path, sim, o);
+    CHECK(sc.noise == Approx(noise).epsilon(1e-9));
+    CHECK(sc.fWords <= 2);  // the first step's level, then one kept
+    for (std::size_t i = 0; i < 100; ++i)
+      CHECK(sc.feed[i] <= sc.wanted[i] * (1.0 + noise) * (1 + 1e-12));
+    // Without noise the same levels follow the target: a load ramp gives more pieces.
+    const SimulationResult ramp =
+        straightRun(100, 1000.0, [&](int i) { return 2000.0 * (1.0 + 0.002 * i); });
+    const Schedule follows = scheduleFeeds(path, ramp, o);
+    CHECK(follows.noise == Approx(0.0).margin(1e-3));
+    CHECK(follows.fWords > 10);
+  }
+  SECTION("under a chip limit (a maximum) a feed rises only where the limit clears the noise") {
+    // h_max 0.02 (1 +- e) mm at 1000 mm/min, --max-chip 0.03 mm: wanted 1500 / (1 +- e).
+    SimulationResult sim = straightRun(100, 1000.0, [](int) { return 2000.0; });
+    StepLoad l;
+    for (int i = 0; i < 100; ++i) {
+      l.hMax = 0.02 * (1.0 + e * sign(i));
+      sim.loads.push_back(l);
+    }
+    ScheduleOptions o;
+    o.mrrTarget = false;
+    o.maxChip = 0.03;
+    o.minChange = 0.005;
+    const Schedule sc = scheduleFeeds(path, sim, o);
+    CHECK(sc.noise == Approx(noise).epsilon(1e-9));
+    CHECK(sc.fWords == 1);  // the first step's level throughout
+    for (std::size_t i = 0; i < 100; ++i) {
+      CHECK(sc.feed[i] <= sc.wanted[i] * (1 + 1e-12));  // the limit holds on every step
+      CHECK(sc.feed[i] >= sc.wanted[i] / (1.005 * (1.0 + noise)) * (1 - 1e-12));
+    }
+  }
+}
