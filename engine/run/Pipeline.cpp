@@ -16,6 +16,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <utility>
 
 namespace engage {
 namespace {
@@ -92,8 +94,69 @@ CrossCheck crossCheck(const Job& job, const SimulationResult& r, Stock& other) {
   return c;
 }
 
-/// The re-fed program read back as the program was and simulated in a fresh stock; its worst
-/// step against each limit the schedule was given (and --feed-max).
+/// The re-fed program on each step of the run: the feed and the re-fed line of the
+/// re-simulated step at the step's middle (the paths are the same; the re-fed one is split
+/// where the feed changes).
+std::vector<std::pair<double, int>> refedFeeds(const SimulationResult& run,
+                                               const SimulationResult& again) {
+  std::vector<std::pair<double, int>> feed(run.steps.size(), {0.0, 0});
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < run.steps.size(); ++i) {
+    const double middle = run.steps[i].arcLength - 0.5 * run.steps[i].length;
+    while (k + 1 < again.steps.size() && again.steps[k].arcLength < middle)
+      ++k;
+    if (k < again.steps.size()) feed[i] = {again.steps[k].feed, again.steps[k].line};
+  }
+  return feed;
+}
+
+/// The jerk (mm/s^3) a change from v0 to v1 (mm/s) over `distance` (mm) needs under
+/// acceleration `a` (0: none): the least j with changeDistance(v0, v1, a, j) <= distance
+/// (infinite when even an unlimited jerk leaves too little room).
+double jerkNeeded(double v0, double v1, double a, double distance) {
+  if (v0 == v1) return 0.0;
+  if (changeDistance(v0, v1, a, 0.0) > distance) return std::numeric_limits<double>::infinity();
+  double lo = 0.0, hi = 1.0;
+  while (changeDistance(v0, v1, a, hi) > distance)
+    hi *= 2.0;
+  for (int k = 0; k < 60; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (changeDistance(v0, v1, a, mid) > distance ? lo : hi) = mid;
+  }
+  return hi;
+}
+
+/// --accel and --jerk on the re-fed program: its feeds on the run's steps, each change between
+/// successive feed steps over the later step's length (Eq 24's acceleration; the jerk its
+/// S-curve needs), as the schedule planned them.
+void checkMotion(const RunResult& r, const SimulationResult& again, Verification& v) {
+  const ScheduleOptions& o = r.job.schedule;
+  if (!(o.acceleration > 0.0) && !(o.jerk > 0.0)) return;
+  const auto& st = r.sim.steps;
+  const std::vector<std::pair<double, int>> refed = refedFeeds(r.sim, again);
+  std::vector<double> feed(refed.size());
+  for (std::size_t i = 0; i < refed.size(); ++i)
+    feed[i] = refed[i].first;
+  LimitCheck accel{"--accel", Dimension::Acceleration, o.acceleration, 0.0, 0, true};
+  LimitCheck jerk{"--jerk", Dimension::Jerk, o.jerk, 0.0, 0, true};
+  auto cutting = [&](std::size_t i) { return st[i].kind != MoveKind::Rapid && feed[i] > 0.0; };
+  for (std::size_t i = 1; i < st.size(); ++i) {
+    if (!cutting(i) || !cutting(i - 1) || feed[i] == feed[i - 1]) continue;
+    const double v0 = feed[i - 1] / 60.0, v1 = feed[i] / 60.0;
+    const double a = std::abs(v1 * v1 - v0 * v0) / (2.0 * st[i].length);
+    const double j = o.jerk > 0.0 ? jerkNeeded(v0, v1, o.acceleration, st[i].length) : 0.0;
+    if (a > accel.worst) accel.worst = a, accel.line = refed[i].second;
+    if (j > jerk.worst) jerk.worst = j, jerk.line = refed[i].second;
+  }
+  for (LimitCheck* c : {&accel, &jerk}) {
+    if (!(c->limit > 0.0)) continue;
+    c->holds = c->worst <= c->limit * (1.0 + kVerifyTolerance);
+    v.checks.push_back(*c);
+  }
+}
+
+}  // namespace
+
 Verification verifySchedule(const RunResult& r) {
   const Job& job = r.job;
   const ScheduleOptions& o = job.schedule;
@@ -134,10 +197,9 @@ Verification verifySchedule(const RunResult& r) {
   check("--feed-max", Dimension::Feed, r.plan.feedMax, [&](std::size_t i) {
     return path.moves[sim.steps[i].move].fixedFeed() ? 0.0 : sim.steps[i].feed;
   });
+  checkMotion(r, sim, v);
   return v;
 }
-
-}  // namespace
 
 namespace {
 

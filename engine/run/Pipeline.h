@@ -78,6 +78,13 @@ struct RunResult {
   std::size_t peakStep = 0;  ///< the first step of the highest measured MRR (0 when none)
 };
 
+/// A schedule's re-fed program (RunResult::refed) read back as the program was and simulated
+/// in a fresh stock: its worst step against each limit the schedule was given and --feed-max;
+/// with --accel or --jerk, the re-fed feeds on the run's steps, each change over the later
+/// step (Eq 24's acceleration and the jerk its S-curve needs), as the schedule planned them.
+/// executeRun calls it for every schedule with a stock.
+Verification verifySchedule(const RunResult& r);
+
 /// The memory a run of `job` may come to hold, bytes, for a batch to decide how many jobs run
 /// side by side: 64 MB for the program, steps and outputs, plus per stock (the run's, the
 /// cross-check's, a schedule's re-simulation's) of a box: the voxel model's bound where the
