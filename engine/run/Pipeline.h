@@ -88,9 +88,10 @@ Verification verifySchedule(const RunResult& r);
 /// The memory a run of `job` may come to hold, bytes, for a batch to decide how many jobs run
 /// side by side: 64 MB for the program, steps and outputs, plus per stock (the run's, the
 /// cross-check's, a schedule's re-simulation's) of a box: the voxel model's bound where the
-/// program cuts (VoxelStock::memoryBound over programReach: 1523 MB for the finishing
-/// benchmark at 0.05 mm, whose run peaks at 1437 MB; 4.2 GB for tiger at 0.125 mm, peak 3.8 GB)
-/// or 1 kB per dexel ray (that run with dexels at 0.1 mm: 350 MB for 422,500 rays). A mesh
+/// program cuts (VoxelStock::memoryBound over programReach: 1.84 GB for the finishing
+/// benchmark at 0.05 mm, whose run peaks at 1.43 GB; 4.20 GB for tiger at 0.125 mm, peak 3.78
+/// GB) or 1 kB per dexel ray (the finishing benchmark with dexels at 0.1 mm: 350 MB for 422,500
+/// rays). A mesh
 /// stock counts its bounds unknown: the 64 MB.
 double memoryEstimate(const Job& job);
 

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <utility>
 
 namespace engage {
 namespace {
@@ -309,6 +310,33 @@ void chooseTargets(const SimulationResult& sim, const ScheduleOptions& o, Schedu
     if (target > 0.0 && !(out.targetMrr > 0.0)) out.targetMrr = target;
 }
 
+/// Per step the feed its physics limits allow (infinite where none binds or no load is
+/// modelled), and which limit sets it.
+void physicsCaps(const SimulationResult& sim, const ScheduleOptions& o, std::vector<double>& cap,
+                 std::vector<Binding>& which) {
+  const auto& st = sim.steps;
+  cap.assign(st.size(), std::numeric_limits<double>::infinity());
+  which.assign(st.size(), Binding::None);
+  if (!o.physicsLimits()) return;
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    const StepLoad& l = sim.loads[i];
+    if (!isFeedStep(st[i]) || std::isnan(l.hMax)) continue;
+    // The feed each limit allows: the chip grows as the feed, torque and power as
+    // T_cut s^p + T_edge, the peak force as its kept values (CuttingForces.h).
+    auto lower = [&](double scale, Binding b) {
+      if (st[i].feed * scale < cap[i]) {
+        cap[i] = st[i].feed * scale;
+        which[i] = b;
+      }
+    };
+    if (o.maxChip > 0.0 && l.hMax > 0.0) lower(o.maxChip / l.hMax, Binding::Chip);
+    if (o.maxForce > 0.0) lower(scaleForPeak(l, o.maxForce), Binding::Force);
+    if (o.maxTorque > 0.0) lower(scaleForTorque(l, o.maxTorque), Binding::Torque);
+    if (o.maxPower > 0.0 && l.torque > 0.0)
+      lower(scaleForTorque(l, o.maxPower * l.torque / l.power), Binding::Power);
+  }
+}
+
 /// Per step the feed the targets and limits want (out.wanted) and what bounds it
 /// (out.binding), within [floor, fMax]; the physics limits that need less than the floor
 /// (out.unmet).
@@ -318,6 +346,19 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
   const bool physics = o.physicsLimits();
   out.wanted.assign(st.size(), 0.0);
   out.binding.assign(st.size(), Binding::None);
+  std::vector<double> own;
+  std::vector<Binding> ownLimit;
+  physicsCaps(sim, o, own, ownLimit);
+  // A load is known at the steps' ends only; the re-fed program's steps fall elsewhere (its
+  // moves are split where the feed changes), and a load that changes within a step would be
+  // met only where it was sampled. So each step also takes its neighbours' caps on the same
+  // move (never below its floor: only its own load makes it unmet).
+  auto neighbours = [&](std::size_t i) {
+    std::pair<double, Binding> c{own[i], ownLimit[i]};
+    for (const std::size_t k : {i - 1, i + 1})
+      if (k < st.size() && st[k].move == st[i].move && own[k] < c.first) c = {own[k], ownLimit[k]};
+    return c;
+  };
   for (std::size_t i = 0; i < st.size(); ++i) {
     const StepRecord& s = st[i];
     if (!isFeedStep(s)) continue;
@@ -344,24 +385,16 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
     }
     double f = target > 0.0 ? s.feed * target / mrr : std::numeric_limits<double>::infinity();
     if (physics) {
-      // The feed each limit allows: the chip grows as the feed, torque and power as
-      // T_cut s^p + T_edge, the peak force as its kept values (CuttingForces.h).
       const StepLoad& l = sim.loads[i];
-      auto lower = [&](double scale, Binding b) {
-        if (s.feed * scale < f) {
-          f = s.feed * scale;
-          out.binding[i] = b;
-        }
-      };
       if (std::isnan(l.hMax)) {
         // No load model (a plunge, a stopped spindle): the programmed feed, or lower.
-        lower(1.0, Binding::Unmodelled);
-      } else {
-        if (o.maxChip > 0.0 && l.hMax > 0.0) lower(o.maxChip / l.hMax, Binding::Chip);
-        if (o.maxForce > 0.0) lower(scaleForPeak(l, o.maxForce), Binding::Force);
-        if (o.maxTorque > 0.0) lower(scaleForTorque(l, o.maxTorque), Binding::Torque);
-        if (o.maxPower > 0.0 && l.torque > 0.0)
-          lower(scaleForTorque(l, o.maxPower * l.torque / l.power), Binding::Power);
+        if (s.feed < f) {
+          f = s.feed;
+          out.binding[i] = Binding::Unmodelled;
+        }
+      } else if (own[i] < f) {
+        f = own[i];
+        out.binding[i] = ownLimit[i];
       }
       if (!std::isfinite(f)) {  // no limit binds (edge forces alone): as fast as allowed
         f = fMax;
@@ -381,6 +414,12 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
                              : b == Binding::Torque ? at.torque
                                                     : at.power,
                              fMin});
+      }
+      const auto [around, limit] = neighbours(i);
+      const double lowered = std::max(around, std::min(f, fMin));
+      if (lowered < f) {
+        f = lowered;
+        out.binding[i] = limit;
       }
     }
     // Plunges (no horizontal motion) load the cutter's end, not its flank: never faster
