@@ -26,6 +26,7 @@
 
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -65,6 +66,10 @@ class VoxelStock : public Stock {
   /// ParameterError for a file without a float grid "stock" of fractions 0 to 1 on a uniform,
   /// unrotated grid, or a voxel size that would not fit in memory.
   static VoxelStock fromVdb(const std::string& path, double voxelSize);
+  /// The box (mm) of the material of a stock.vdb's grid "stock", from the file's metadata
+  /// (the active voxels' bounds OpenVDB writes with each grid) without reading the grid;
+  /// nullopt when the file or that metadata cannot be read (fromVdb then says why).
+  static std::optional<Box3> fileBounds(const std::string& path);
   /// The same stock as dexels of spacing h: each column of the resampled voxels becomes a ray;
   /// a partial voxel whose fractions change mostly along z is a shorter piece of the column
   /// (a floor or a top), otherwise the whole piece with its fraction as the column's share.

@@ -590,6 +590,31 @@ void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
   writeVdb(path, openvdb::GridPtrVec{removed, step, mrr});
 }
 
+std::optional<Box3> VoxelStock::fileBounds(const std::string& path) {
+  initVdb();
+  try {
+    openvdb::io::File file(path);
+    file.open(false);
+    if (!file.hasGrid("stock")) return std::nullopt;
+    const openvdb::GridBase::ConstPtr meta = file.readGridMetadata("stock");
+    file.close();
+    const auto lo = meta->getMetadata<openvdb::Vec3IMetadata>("file_bbox_min");
+    const auto hi = meta->getMetadata<openvdb::Vec3IMetadata>("file_bbox_max");
+    const openvdb::math::Transform& xf = meta->transform();
+    if (!lo || !hi || !xf.isLinear()) return std::nullopt;
+    Box3 box;
+    const openvdb::Vec3d a = xf.indexToWorld(openvdb::Vec3d(lo->value()) - openvdb::Vec3d(0.5));
+    const openvdb::Vec3d b = xf.indexToWorld(openvdb::Vec3d(hi->value()) + openvdb::Vec3d(0.5));
+    for (int k = 0; k < 3; ++k) {
+      box.min[k] = std::min(a[k], b[k]);
+      box.max[k] = std::max(a[k], b[k]);
+    }
+    return box;
+  } catch (const openvdb::Exception&) {
+    return std::nullopt;
+  }
+}
+
 VoxelStock VoxelStock::fromVdb(const std::string& path, double h) {
   const StockFile file = readStockGrid(path);
   auto impl = std::make_unique<Impl>();

@@ -6,15 +6,40 @@
 
 #include "cutters/Error.h"
 #include "engine/gcode/GcodeReader.h"
+#include "stock/TriangleMesh.h"
+#include "stock/VoxelStock.h"
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
 namespace engage {
 namespace {
+
+/// The bounds (mm) of a stock read from a file, before it is read: a mesh's points, a
+/// stock.vdb's metadata; none when they cannot be had (the stock's reading says why).
+std::optional<Box3> stockFileBounds(const StockSpec& stock) {
+  if (!stock.vdb.empty()) return VoxelStock::fileBounds(stock.vdb);
+  if (stock.mesh.empty()) return std::nullopt;
+  try {
+    const TriangleMesh mesh = readMesh(stock.mesh);
+    if (mesh.points.empty()) return std::nullopt;
+    Box3 b;
+    b.min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    b.max = -b.min;
+    for (const auto& p : mesh.points)
+      for (int a = 0; a < 3; ++a) {
+        b.min[a] = std::min(b.min[a], static_cast<double>(p[static_cast<std::size_t>(a)]));
+        b.max[a] = std::max(b.max[a], static_cast<double>(p[static_cast<std::size_t>(a)]));
+      }
+    return b;
+  } catch (const Error&) {
+    return std::nullopt;
+  }
+}
 
 /// "a, b and c" (or "a, b or c" with `conjunction` "or").
 std::string wordList(const std::vector<std::string>& words, const char* conjunction) {
@@ -606,7 +631,10 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   job.voxelGiven = !voxel.empty();
   const StockModels models{job.stockModel == StockModel::Voxel || job.crossCheck,
                            job.stockModel == StockModel::Dexel || job.crossCheck};
-  job.cellChoice = defaultCell(job.path, job.cutters, job.stock.box, models, so.stepLength);
+  job.cellChoice = job.stock.box
+                       ? defaultCell(job.path, job.cutters, job.stock.box, models, so.stepLength)
+                       : defaultCell(job.path, job.cutters, stockFileBounds(job.stock), models,
+                                     so.stepLength, false);
   job.voxel = job.voxelGiven ? parseQuantity(voxel, Dimension::Length, sys, "--voxel").value
                              : job.cellChoice.cell;
   if (!(job.voxel > 0.0)) throw ParameterError("--voxel must be positive");

@@ -115,7 +115,8 @@ std::vector<Box3> programReach(const Toolpath& path, const CutterSet& cutters, c
 }
 
 CellChoice defaultCell(const Toolpath& path, const CutterSet& cutters,
-                       const std::optional<Box3>& box, StockModels models, double fixedStep) {
+                       const std::optional<Box3>& box, StockModels models, double fixedStep,
+                       bool boxStock) {
   CellChoice choice;
   choice.engagement =
       programEngagement(path, cutters, box ? std::optional<double>(box->max.z()) : std::nullopt);
@@ -127,13 +128,14 @@ CellChoice defaultCell(const Toolpath& path, const CutterSet& cutters,
   if (choice.limit == CellLimit::Nominal) return choice;
   // Coarser only as far as the budgets need: each bound shrinks as the cell grows.
   const std::vector<Box3> reach =
-      box && models.voxel ? programReach(path, cutters, *box) : std::vector<Box3>{};
+      box && models.voxel && boxStock ? programReach(path, cutters, *box) : std::vector<Box3>{};
   auto memory = [&](double h) {
     if (!box) return 0.0;
     const double dexel = models.dexel ? DexelStock::memoryBound(*box, h) : 0.0;
     const double left = kStockBudgetBytes - dexel;
-    return dexel +
-           (models.voxel && left >= 0.0 ? VoxelStock::memoryBound(*box, h, &reach, left) : 0.0);
+    return dexel + (models.voxel && left >= 0.0
+                        ? VoxelStock::memoryBound(*box, h, boxStock ? &reach : nullptr, left)
+                        : 0.0);
   };
   auto steps = [&](double h) { return fixedStep > 0.0 ? 0.0 : stepCount(path, 2.5 * h); };
   auto fits = [&](double h) { return memory(h) <= kStockBudgetBytes && steps(h) <= kStepBudget; };

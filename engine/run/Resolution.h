@@ -68,12 +68,15 @@ struct StockModels {
   bool dexel = false;
 };
 
-/// The default cell for a stock `box` (mm, none for a mesh or .vdb stock: its top is known only
-/// once it is read) held in `models`: a twentieth of the engaged diameter, coarser only as far
-/// as the budgets need, never coarser than a twentieth of the nominal one. `fixedStep` (mm, 0:
-/// the default 2.5 cells) leaves the step count alone.
+/// The default cell for a stock of bounds `box` (mm; none: unknown) held in `models`: a
+/// twentieth of the engaged diameter, coarser only as far as the budgets need, never coarser
+/// than a twentieth of the nominal one. `fixedStep` (mm, 0: the default 2.5 cells) leaves the
+/// step count alone. `boxStock`: the stock is that box, whose voxels are held only where the
+/// program cuts (VoxelStock::memoryBound over programReach); otherwise (a mesh or a .vdb, its
+/// bounds) every voxel of the bounds counts, as their reading checks.
 CellChoice defaultCell(const Toolpath& path, const CutterSet& cutters,
-                       const std::optional<Box3>& box, StockModels models, double fixedStep);
+                       const std::optional<Box3>& box, StockModels models, double fixedStep,
+                       bool boxStock = true);
 
 /// One line for the user: the cell and why, e.g. "0.00404 mm: a twentieth of the 0.0808 mm
 /// tool 1 engages at 0.07 mm deep (nominal 3.175 mm)", lengths in `units`.

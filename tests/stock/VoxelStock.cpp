@@ -24,6 +24,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <set>
 #include <vector>
 
@@ -389,6 +390,25 @@ std::string tempVdb(const std::string& name) {
 }
 
 }  // namespace
+
+TEST_CASE("a stock.vdb's bounds come from its metadata, before the grid is read", "[stock][vdb]") {
+  // The box's partial voxels reach out to whole voxels of 0.5 mm (voxel i covers
+  // [(i - 1/2) h, (i + 1/2) h]): X 0.13 .. 10.11 lies in voxels 0 .. 20, so -0.25 .. 10.25.
+  Box3 b;
+  b.min = {0.13, -1.07, -3.21};
+  b.max = {10.11, 5.5, 0.0};
+  const std::string path = tempVdb("bounds.vdb");
+  VoxelStock::box(b, 0.5).writeStockVdb(path);
+  const std::optional<Box3> r = VoxelStock::fileBounds(path);
+  REQUIRE(r);
+  CHECK(r->min.x() == Approx(-0.25));  // voxel 0
+  CHECK(r->max.x() == Approx(10.25));  // voxel 20
+  CHECK(r->min.y() == Approx(-1.25));  // voxel -2
+  CHECK(r->max.y() == Approx(5.75));   // voxel 11
+  CHECK(r->min.z() == Approx(-3.25));  // voxel -6
+  CHECK(r->max.z() == Approx(0.25));   // voxel 0, half material
+  CHECK_FALSE(VoxelStock::fileBounds(tempVdb("missing.vdb") + ".none"));
+}
 
 TEST_CASE("a stock.vdb read back holds the volume it was written with, at any voxel size",
           "[stock][vdb]") {

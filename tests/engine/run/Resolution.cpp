@@ -9,6 +9,7 @@
 #include "engine/run/Job.h"
 #include "engine/run/Pipeline.h"
 #include "stock/DexelStock.h"
+#include "stock/TriangleMesh.h"
 #include "stock/VoxelStock.h"
 #include "tests/engine/run/RunTestSupport.h"
 
@@ -251,5 +252,41 @@ TEST_CASE("shallow engraving removes its hand volume at the default cell", "[run
       INFO(c.name << " in " << model << ": cell " << job.voxel << " mm, removed " << r.sim.removed
                   << " mm^3, by hand " << hand);
       CHECK(r.sim.removed == Approx(hand).epsilon(0.02));
+    }
+}
+
+TEST_CASE("a mesh or stock.vdb stock's default cell follows the engaged diameter too",
+          "[run][slow]") {
+  // The V-bit's groove of the shallow-engraving case in the same 14 x 3 x 1 mm plate, given as
+  // a closed STL box and as a stock.vdb of an earlier run: the cell is no longer the nominal
+  // 0.159 mm (half a cell across the groove, +74 %), and the groove's volume is within 2 % of
+  // the hand volume (section 0.07 x r plus the cone's ends, r = 0.07 tan 30 deg).
+  const double d = 0.07, r = d * std::tan(deg(30.0));
+  const double hand = d * r * 10.0 + kPi * r * r * d / 3.0;
+  test::TempFolder dir("engraving_files");
+  TriangleMesh plate;
+  for (int k = 0; k < 8; ++k)
+    plate.points.push_back({k & 1 ? 12.0f : -2.0f, k & 2 ? 2.0f : -1.0f, k & 4 ? 0.0f : -1.0f});
+  // Two triangles per face, wound outwards.
+  plate.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                     {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  const std::string stl = (dir.path() / "plate.stl").string();
+  writeStl(plate, stl);
+  const std::string vdb = (dir.path() / "plate.vdb").string();
+  VoxelStock::box(box(-2, -1, -1, 12, 2, 0), 0.05).writeStockVdb(vdb);
+  for (const std::string& stock : {stl, vdb})
+    for (const char* model : {"dexel", "voxel"}) {
+      OptionValues v = {{"tool", "chamfer"}, {"diameter", "3.175mm"}, {"tip-angle", "60deg"}};
+      v["program"] = dir.write("groove.ngc", grooveProgram(d, 10.0));
+      v["stock"] = stock;
+      v["stock-model"] = model;
+      const Job job = makeJob(JobCommand::Simulate, v);
+      INFO(stock << " in " << model << ": cell " << job.voxel << " mm ("
+                 << describeCell(job.cellChoice, UnitSystem::Metric) << ")");
+      CHECK(job.cellChoice.engagement.known);
+      CHECK(job.voxel < 2.0 * r / 5.0);  // five cells across the groove at least
+      const RunResult res = runJob(job);
+      INFO("removed " << res.sim.removed << " mm^3, by hand " << hand);
+      CHECK(res.sim.removed == Approx(hand).epsilon(0.02));
     }
 }
