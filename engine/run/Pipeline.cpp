@@ -134,15 +134,13 @@ void checkMotion(const RunResult& r, const SimulationResult& again, Verification
   if (!(o.acceleration > 0.0) && !(o.jerk > 0.0)) return;
   const auto& st = r.sim.steps;
   const std::vector<std::pair<double, int>> refed = refedFeeds(r.sim, again);
-  std::vector<double> feed(refed.size());
-  for (std::size_t i = 0; i < refed.size(); ++i)
-    feed[i] = refed[i].first;
+  auto feed = [&](std::size_t i) { return refed[i].first; };
   LimitCheck accel{"--accel", Dimension::Acceleration, o.acceleration, 0.0, 0, true};
   LimitCheck jerk{"--jerk", Dimension::Jerk, o.jerk, 0.0, 0, true};
-  auto cutting = [&](std::size_t i) { return st[i].kind != MoveKind::Rapid && feed[i] > 0.0; };
+  auto cutting = [&](std::size_t i) { return st[i].kind != MoveKind::Rapid && feed(i) > 0.0; };
   for (std::size_t i = 1; i < st.size(); ++i) {
-    if (!cutting(i) || !cutting(i - 1) || feed[i] == feed[i - 1]) continue;
-    const double v0 = feed[i - 1] / 60.0, v1 = feed[i] / 60.0;
+    if (!cutting(i) || !cutting(i - 1) || feed(i) == feed(i - 1)) continue;
+    const double v0 = feed(i - 1) / 60.0, v1 = feed(i) / 60.0;
     const double a = std::abs(v1 * v1 - v0 * v0) / (2.0 * st[i].length);
     const double j = o.jerk > 0.0 ? jerkNeeded(v0, v1, o.acceleration, st[i].length) : 0.0;
     if (a > accel.worst) accel.worst = a, accel.line = refed[i].second;
@@ -183,17 +181,10 @@ Verification verifySchedule(const RunResult& r) {
     c.holds = c.worst <= limit * (1.0 + kVerifyTolerance);
     v.checks.push_back(c);
   };
-  const bool loads = sim.loads.size() == sim.steps.size();
-  if (loads) {
-    check("--max-chip", Dimension::Length, o.maxChip,
-          [&](std::size_t i) { return sim.loads[i].hMax; });
-    check("--max-force", Dimension::Force, o.maxForce,
-          [&](std::size_t i) { return sim.loads[i].peak; });
-    check("--max-torque", Dimension::Torque, o.maxTorque,
-          [&](std::size_t i) { return sim.loads[i].torque; });
-    check("--max-power", Dimension::Power, o.maxPower,
-          [&](std::size_t i) { return sim.loads[i].power; });
-  }
+  if (sim.loads.size() == sim.steps.size())
+    for (const PhysicsLimit& k : kPhysicsLimits)
+      check(k.option, k.dimension, o.*k.value,
+            [&](std::size_t i) { return limitedLoad(sim.loads[i], k.binding); });
   check("--feed-max", Dimension::Feed, r.plan.feedMax, [&](std::size_t i) {
     return path.moves[sim.steps[i].move].fixedFeed() ? 0.0 : sim.steps[i].feed;
   });
@@ -223,7 +214,8 @@ PreparedRun prepareStocks(Job job) {
 double memoryEstimate(const Job& job) {
   double bytes = 64e6;
   if (job.stock.box) {
-    const std::vector<Box3> reach = jobReach(job);
+    const bool voxel = job.stockModel == StockModel::Voxel || job.crossCheck;
+    const std::vector<Box3> reach = voxel ? jobReach(job) : std::vector<Box3>{};
     auto one = [&](StockModel m) {
       return m == StockModel::Voxel ? VoxelStock::memoryBound(*job.stock.box, job.voxel, &reach)
                                     : DexelStock::memoryBound(*job.stock.box, job.voxel) /

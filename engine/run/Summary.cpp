@@ -456,20 +456,12 @@ std::string unmetLimits(const RunResult& result) {
   const Schedule& plan = result.plan;
   const UnitSystem sys = result.job.units;
   std::string text;
-  const struct {
-    Binding limit;
-    const char* option;
-    Dimension dimension;
-  } kinds[] = {{Binding::Chip, "--max-chip", Dimension::Length},
-               {Binding::Force, "--max-force", Dimension::Force},
-               {Binding::Torque, "--max-torque", Dimension::Torque},
-               {Binding::Power, "--max-power", Dimension::Power}};
-  for (const auto& k : kinds) {
+  for (const PhysicsLimit& k : kPhysicsLimits) {
     std::vector<int> lines;
     const UnmetLimit* worst = nullptr;
     std::size_t steps = 0;
     for (const UnmetLimit& u : plan.unmet) {
-      if (u.limit != k.limit) continue;
+      if (u.limit != k.binding) continue;
       ++steps;
       const int line = result.sim.steps[u.step].line;
       if (lines.empty() || lines.back() != line) lines.push_back(line);

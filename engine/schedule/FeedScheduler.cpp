@@ -402,18 +402,11 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
       }
       if (physicsBinding(out.binding[i]) && f < fMin) {
         // Met only below the lowest feed allowed: the load that remains there.
-        const ScaledLoad at = scaleLoad(l, fMin / s.feed);
         const Binding b = out.binding[i];
-        out.unmet.push_back({i, b,
-                             b == Binding::Chip     ? o.maxChip
-                             : b == Binding::Force  ? o.maxForce
-                             : b == Binding::Torque ? o.maxTorque
-                                                    : o.maxPower,
-                             b == Binding::Chip     ? at.hMax
-                             : b == Binding::Force  ? at.peak
-                             : b == Binding::Torque ? at.torque
-                                                    : at.power,
-                             fMin});
+        for (const PhysicsLimit& k : kPhysicsLimits)
+          if (k.binding == b)
+            out.unmet.push_back(
+                {i, b, o.*k.value, limitedLoad(scaleLoad(l, fMin / s.feed), b), fMin});
       }
       const auto [around, limit] = neighbours(i);
       const double lowered = std::max(around, std::min(f, fMin));

@@ -13,6 +13,7 @@
 #include "engine/gcode/GcodeWriter.h"
 #include "engine/gcode/Toolpath.h"
 #include "engine/sim/Simulation.h"
+#include "engine/units/Quantity.h"
 
 #include <map>
 #include <string>
@@ -91,6 +92,32 @@ enum class Binding {
   Power,
   Unmodelled
 };
+
+/// One physics limit of a schedule: what a step it binds is marked, the option that sets it,
+/// its unit and its value in ScheduleOptions.
+struct PhysicsLimit {
+  Binding binding;
+  const char* option;
+  Dimension dimension;
+  double ScheduleOptions::*value;
+};
+
+/// The physics limits, in the order they are reported.
+inline constexpr PhysicsLimit kPhysicsLimits[] = {
+    {Binding::Chip, "--max-chip", Dimension::Length, &ScheduleOptions::maxChip},
+    {Binding::Force, "--max-force", Dimension::Force, &ScheduleOptions::maxForce},
+    {Binding::Torque, "--max-torque", Dimension::Torque, &ScheduleOptions::maxTorque},
+    {Binding::Power, "--max-power", Dimension::Power, &ScheduleOptions::maxPower}};
+
+/// The load a limit holds, of a step's load (StepLoad) or of one scaled to a feed
+/// (ScaledLoad): h_max, the peak force, the torque or the power.
+template <class Load>
+double limitedLoad(const Load& l, Binding b) {
+  return b == Binding::Chip     ? l.hMax
+         : b == Binding::Force  ? l.peak
+         : b == Binding::Torque ? l.torque
+                                : l.power;
+}
 
 /// A physics limit a step cannot meet at the lowest feed it may get.
 struct UnmetLimit {
