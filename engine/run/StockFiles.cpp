@@ -5,6 +5,10 @@
 
 #include <tbb/task_group.h>
 
+#include <array>
+#include <exception>
+#include <functional>
+
 namespace engage {
 
 StockView::StockView(const RunResult& result) : result_(result) {}
@@ -22,31 +26,50 @@ std::size_t writeStockFiles(const RunResult& result, const StockView& view,
                             const std::filesystem::path& dir,
                             const std::function<void(const VoxelStock&)>& alongside) {
   // The files, and `alongside`, are independent of one another: each a task, run side by side
-  // where there are cores for it (one core runs them one after another, as before).
+  // where there are cores for it (one core runs them one after another, as before). A task
+  // keeps its own failure: one thrown into the group would cancel the group, and with it the
+  // parallel loops inside the tasks still running, which would then go on with half-computed
+  // results (a report's surface from a cancelled loop grew without end on a full disk). After
+  // all have ended, the failure of the first task in this order is thrown: removed.vdb,
+  // stock.vdb, stock.stl, alongside.
   tbb::task_group tasks;
+  std::array<std::exception_ptr, 4> failed;
+  auto run = [&](std::size_t slot, std::function<void()> task) {
+    tasks.run([&failed, slot, task = std::move(task)] {
+      try {
+        task();
+      } catch (...) {
+        failed[slot] = std::current_exception();
+      }
+    });
+  };
+  auto finish = [&] {
+    tasks.wait();
+    for (const std::exception_ptr& e : failed)
+      if (e) std::rethrow_exception(e);
+  };
   // A dexel stock: its removal from its own record, its material as voxel fractions, for the
   // same viewers.
   const auto* dexels = dynamic_cast<const DexelStock*>(result.stock.get());
-  if (dexels)
-    tasks.run([&] { VoxelStock::writeRemovedVdb(*dexels, (dir / "removed.vdb").string()); });
+  if (dexels) run(0, [&] { VoxelStock::writeRemovedVdb(*dexels, (dir / "removed.vdb").string()); });
   const VoxelStock* shown = nullptr;
   try {
     shown = view.voxels();  // (a dexel stock converted while its removed.vdb is written)
   } catch (...) {
-    tasks.wait();  // (removed.vdb's own failure, if it failed too, is the one thrown)
+    finish();  // (removed.vdb's own failure, if it failed too, is the one thrown)
     throw;
   }
   if (!shown) {
-    tasks.wait();
+    finish();
     return 0;
   }
-  if (!dexels) tasks.run([&] { shown->writeRemovedVdb((dir / "removed.vdb").string()); });
-  tasks.run([&] { shown->writeStockVdb((dir / "stock.vdb").string()); });
+  if (!dexels) run(0, [&] { shown->writeRemovedVdb((dir / "removed.vdb").string()); });
+  run(1, [&] { shown->writeStockVdb((dir / "stock.vdb").string()); });
   std::size_t openEdges = 0;
-  tasks.run(
+  run(2,
       [&] { openEdges = shown->writeStl((dir / "stock.stl").string(), result.job.stlTriangles); });
-  if (alongside) tasks.run([&] { alongside(*shown); });
-  tasks.wait();
+  if (alongside) run(3, [&] { alongside(*shown); });
+  finish();
   return openEdges;
 }
 
