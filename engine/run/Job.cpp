@@ -295,7 +295,8 @@ std::vector<ToolChange> toolChanges(const Toolpath& path) {
 
 /// The cutters of the job's moves: one --tool for all, or the library's per T number.
 /// `defaultTool`: the tool taken for moves before any change when --tool is not given (a
-/// CAMotics project: 1, as CAMotics selects it); 0: the program's first tool.
+/// CAMotics project: 1, as CAMotics selects it, where the project has it); 0: the program's
+/// first tool.
 void chooseCutters(Job& job, const std::optional<ToolLibrary>& lib,
                    const std::optional<AptCutter>& single, int defaultTool) {
   const auto changes = toolChanges(job.path);
@@ -344,7 +345,9 @@ void chooseCutters(Job& job, const std::optional<ToolLibrary>& lib,
   if (single) {
     job.cutters.byTool.emplace(0, *single);
   } else {
-    job.startTool = defaultTool != 0 ? defaultTool : changes.front().tool;
+    // (A project without T1 whose program loads its tool after a few rapids: that tool.)
+    const bool given = defaultTool != 0 && (!lib->numbered(defaultTool).empty() || changes.empty());
+    job.startTool = given ? defaultTool : changes.front().tool;
     load(job.startTool);
     job.cutters.byTool.emplace(0, job.cutters.byTool.at(job.startTool));
     job.cutters.partsByTool[0] = job.cutters.partsByTool[job.startTool];

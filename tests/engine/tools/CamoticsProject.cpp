@@ -110,3 +110,16 @@ TEST_CASE("a project's programs run one after the other, each from where the las
     CHECK_THAT(std::string(e.what()), Contains("schedule re-feeds one program"));
   }
 }
+
+TEST_CASE("a project without T1 starts with the tool its program loads", "[tools][run]") {
+  // As CAMotics' genes-encoder example: a rapid, then M06 T7, and the project has T7 alone.
+  test::TempFolder dir("camotics_no_t1");
+  dir.write("a.ngc", "G21 G90\nG0 X0 Y0\nM06 T7\nG0 Z5\nG1 Z-1 F100\nG1 X10\nM2\n");
+  const std::string project = dir.write("p.camotics", R"({
+      "tools": {"7": {"units": "metric", "shape": "cylindrical", "length": 10, "diameter": 3}},
+      "workpiece": {"automatic": false, "bounds": {"min": [-5, -5, -3], "max": [15, 15, 0]}},
+      "files": ["a.ngc"]})");
+  const Job job = makeJob(JobCommand::Simulate, {{"program", project}});
+  CHECK(job.startTool == 7);
+  CHECK(job.cutters.of(0).radius() == Approx(1.5).margin(1e-12));
+}
