@@ -22,8 +22,11 @@ MUTANTS = {
         ("engine/schedule/FeedScheduler.cpp",
          "v(i - 1) * v(i - 1) + 2.0 * a * st[i].length", "v(i - 1) * v(i - 1) + 1.0 * a * st[i].length"),
     "schedule: F-level hysteresis a whole level":
-        ("engine/schedule/FeedScheduler.cpp", "previous <= feed[i] * (1.0 + 0.5 * q)",
-         "previous <= feed[i] * (1.0 + 1.0 * q)"),
+        ("engine/schedule/FeedScheduler.cpp", "physics ? 0.0 : std::max(0.5 * o.minChange, out.noise)",
+         "physics ? 0.0 : std::max(1.0 * o.minChange, out.noise)"),
+    "schedule: lower F words braked in half the distance":
+        ("engine/schedule/FeedScheduler.cpp", "changeDistance(reach, feed[i] / 60.0, a, j) <= gap",
+         "changeDistance(reach, feed[i] / 60.0, a, j) <= 2.0 * gap"),
     "schedule: plunges may go faster than programmed":
         ("engine/schedule/FeedScheduler.cpp", "if (plunge && f > s.feed) {", "if (plunge && f < s.feed) {"),
     "schedule: steady steps within 20 % instead of 2 %":

@@ -287,9 +287,11 @@ double median(std::vector<double> v) {
 
 /// Per step of the outer ring: arc length from the ring's start, MRR measured and analytic,
 /// the adaptive feed of the paper (Eq 21-23, V_fc held at the straight cut's) and engage's
-/// schedule from the measured MRR to the same target, and Eq 24's acceleration of both.
+/// schedule from the measured MRR to the same target, and Eq 24's acceleration of the paper's
+/// feed and of the machine's speed under engage's (Schedule::speed).
 struct Ring {
-  std::vector<double> s, mrr, exact, paper, feedPaper, feedMeasured, accPaper, accMeasured;
+  std::vector<double> s, mrr, exact, paper, feedPaper, feedMeasured, speedMeasured, accPaper,
+      accMeasured;
   std::vector<PathSide> side;
   double target = 0.0;  ///< mm^3/min
 };
@@ -327,13 +329,14 @@ Ring outerRing(const Run& run, double depth) {
     }
     r.feedPaper.push_back(fp);
     r.feedMeasured.push_back(plan.feed[i]);
+    r.speedMeasured.push_back(plan.speed[i]);
     const std::size_t k = r.s.size() - 1;
     auto acc = [&](const std::vector<double>& f) {
       if (k == 0 || !std::isfinite(f[k]) || !std::isfinite(f[k - 1])) return 0.0;
       return tangentialAcceleration(f[k - 1], f[k], st.length);
     };
     r.accPaper.push_back(acc(r.feedPaper));
-    r.accMeasured.push_back(acc(r.feedMeasured));
+    r.accMeasured.push_back(acc(r.speedMeasured));
   }
   return r;
 }

@@ -94,22 +94,6 @@ CrossCheck crossCheck(const Job& job, const SimulationResult& r, Stock& other) {
   return c;
 }
 
-/// The re-fed program on each step of the run: the feed and the re-fed line of the
-/// re-simulated step at the step's middle (the paths are the same; the re-fed one is split
-/// where the feed changes).
-std::vector<std::pair<double, int>> refedFeeds(const SimulationResult& run,
-                                               const SimulationResult& again) {
-  std::vector<std::pair<double, int>> feed(run.steps.size(), {0.0, 0});
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < run.steps.size(); ++i) {
-    const double middle = run.steps[i].arcLength - 0.5 * run.steps[i].length;
-    while (k + 1 < again.steps.size() && again.steps[k].arcLength < middle)
-      ++k;
-    if (k < again.steps.size()) feed[i] = {again.steps[k].feed, again.steps[k].line};
-  }
-  return feed;
-}
-
 /// The jerk (mm/s^3) a change from v0 to v1 (mm/s) over `distance` (mm) needs under
 /// acceleration `a` (0: none): the least j with changeDistance(v0, v1, a, j) <= distance
 /// (infinite when even an unlimited jerk leaves too little room).
@@ -126,25 +110,46 @@ double jerkNeeded(double v0, double v1, double a, double distance) {
   return hi;
 }
 
-/// --accel and --jerk on the re-fed program: its feeds on the run's steps, each change between
-/// successive feed steps over the later step's length (Eq 24's acceleration; the jerk its
-/// S-curve needs), as the schedule planned them.
+/// --accel and --jerk on the re-fed program: a machine that brakes only where a lower F word
+/// takes effect must be down to the speed each step's load limits allow (from its re-simulated
+/// load; its F word where that is higher) when the step begins. Each earlier step of the same
+/// run of feed moves whose F word is higher needs, over the distance between the two, the
+/// deceleration (v0^2 - v1^2) / (2 distance) and the jerk of that S-curve (jerkNeeded); the
+/// worst pair of each is checked. Pairs farther apart than the longest braking at the limits
+/// (the top speed times the time of a change from it to standstill) need less than the limits
+/// and are not looked at. Only load limits bound a step's speed:
+/// without one (an MRR target alone) nothing is checked here.
 void checkMotion(const RunResult& r, const SimulationResult& again, Verification& v) {
   const ScheduleOptions& o = r.job.schedule;
-  if (!(o.acceleration > 0.0) && !(o.jerk > 0.0)) return;
-  const auto& st = r.sim.steps;
-  const std::vector<std::pair<double, int>> refed = refedFeeds(r.sim, again);
-  auto feed = [&](std::size_t i) { return refed[i].first; };
+  if ((!(o.acceleration > 0.0) && !(o.jerk > 0.0)) || !o.physicsLimits() ||
+      again.loads.size() != again.steps.size())
+    return;
+  const auto& st = again.steps;
+  std::vector<double> cap;
+  std::vector<Binding> which;
+  physicsCaps(again, o, cap, which);
+  auto cutting = [&](std::size_t i) { return st[i].kind != MoveKind::Rapid && st[i].feed > 0.0; };
+  double vMax = 0.0;
+  for (std::size_t i = 0; i < st.size(); ++i)
+    if (cutting(i)) vMax = std::max(vMax, st[i].feed / 60.0);
+  const double window = vMax * changeTime(vMax, o.acceleration, o.jerk);  // the longest braking
   LimitCheck accel{"--accel", Dimension::Acceleration, o.acceleration, 0.0, 0, true};
   LimitCheck jerk{"--jerk", Dimension::Jerk, o.jerk, 0.0, 0, true};
-  auto cutting = [&](std::size_t i) { return st[i].kind != MoveKind::Rapid && feed(i) > 0.0; };
-  for (std::size_t i = 1; i < st.size(); ++i) {
-    if (!cutting(i) || !cutting(i - 1) || feed(i) == feed(i - 1)) continue;
-    const double v0 = feed(i - 1) / 60.0, v1 = feed(i) / 60.0;
-    const double a = std::abs(v1 * v1 - v0 * v0) / (2.0 * st[i].length);
-    const double j = o.jerk > 0.0 ? jerkNeeded(v0, v1, o.acceleration, st[i].length) : 0.0;
-    if (a > accel.worst) accel.worst = a, accel.line = refed[i].second;
-    if (j > jerk.worst) jerk.worst = j, jerk.line = refed[i].second;
+  for (std::size_t k = 1; k < st.size(); ++k) {
+    if (!cutting(k) || !std::isfinite(cap[k])) continue;
+    const double v1 = std::max(cap[k], st[k].feed) / 60.0;
+    const double start = st[k].arcLength - st[k].length;
+    for (std::size_t i = k; i-- > 0 && cutting(i);) {
+      const double gap = start - st[i].arcLength;
+      if (gap > window) break;
+      const double v0 = st[i].feed / 60.0;
+      if (!(v0 > v1)) continue;
+      const double a =
+          gap > 0.0 ? (v0 * v0 - v1 * v1) / (2.0 * gap) : std::numeric_limits<double>::infinity();
+      const double j = o.jerk > 0.0 ? jerkNeeded(v0, v1, o.acceleration, gap) : 0.0;
+      if (a > accel.worst) accel.worst = a, accel.line = st[k].line;
+      if (j > jerk.worst) jerk.worst = j, jerk.line = st[k].line;
+    }
   }
   for (LimitCheck* c : {&accel, &jerk}) {
     if (!(c->limit > 0.0)) continue;

@@ -24,7 +24,7 @@ double scheduledAcceleration(const RunResult& result, std::size_t i) {
   const auto& steps = result.sim.steps;
   if (i == 0 || steps[i].kind == MoveKind::Rapid || steps[i - 1].kind == MoveKind::Rapid)
     return 0.0;
-  return tangentialAcceleration(result.plan.feed[i - 1], result.plan.feed[i], steps[i].length);
+  return tangentialAcceleration(result.plan.speed[i - 1], result.plan.speed[i], steps[i].length);
 }
 
 void writeStepsTable(std::ostream& os, const RunResult& result,

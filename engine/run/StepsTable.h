@@ -24,8 +24,8 @@ void writeStepsTable(std::ostream& os, const RunResult& result,
 /// scale with it.
 double feedScale(const RunResult& result, std::size_t i);
 
-/// Eq 24's tangential acceleration between step i-1 and step i with the scheduled feeds,
-/// mm/s^2 (0 at the first step and next to rapids).
+/// Eq 24's tangential acceleration between step i-1 and step i at the machine's speeds
+/// under the scheduled feeds (Schedule::speed), mm/s^2 (0 at the first step and next to rapids).
 double scheduledAcceleration(const RunResult& result, std::size_t i);
 
 }  // namespace engage

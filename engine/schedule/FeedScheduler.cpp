@@ -44,6 +44,15 @@ void limitAcceleration(const SimulationResult& sim, std::vector<double>& feed, d
   }
 }
 
+/// Where each run of successive feed steps begins (the machine does not stop within one).
+std::vector<std::size_t> feedRuns(const SimulationResult& sim) {
+  const auto& st = sim.steps;
+  std::vector<std::size_t> runStart(st.size(), 0);
+  for (std::size_t i = 1; i < st.size(); ++i)
+    runStart[i] = isFeedStep(st[i]) && isFeedStep(st[i - 1]) ? runStart[i - 1] : i;
+  return runStart;
+}
+
 /// The highest speed (mm/s) reachable from v0 within `distance` (mm) under changeDistance.
 double reachable(double v0, double vWanted, double distance, double a, double j) {
   if (changeDistance(v0, vWanted, a, j) <= distance) return vWanted;
@@ -68,11 +77,8 @@ void limitJerk(const SimulationResult& sim, std::vector<double>& feed, double a,
     if (isFeedStep(st[i])) vMax = std::max(vMax, feed[i] / 60.0);
   // No change between feeds up to vMax needs more than vMax T(vMax) (mean speed at most
   // vMax, T growing with the change).
-  const double window = 2.0 * changeDistance(0.0, vMax, a, j);
-  // Where each run of successive feed steps begins.
-  std::vector<std::size_t> runStart(st.size(), 0);
-  for (std::size_t i = 1; i < st.size(); ++i)
-    runStart[i] = isFeedStep(st[i]) && isFeedStep(st[i - 1]) ? runStart[i - 1] : i;
+  const double window = vMax * changeTime(vMax, a, j);
+  const std::vector<std::size_t> runStart = feedRuns(sim);
   for (std::size_t k = 1; k < st.size(); ++k) {
     if (!isFeedStep(st[k])) continue;
     for (std::size_t i = k; i-- > runStart[k];) {
@@ -95,9 +101,44 @@ void limitJerk(const SimulationResult& sim, std::vector<double>& feed, double a,
   }
 }
 
-void limitMotion(const SimulationResult& sim, std::vector<double>& feed, double a, double j) {
-  limitAcceleration(sim, feed, a);
-  limitJerk(sim, feed, a, j);
+/// Commanded feeds (F words) that a machine braking only where a lower F word takes effect
+/// (no look-ahead) follows without running any step faster than it allows (`allowed`, or up
+/// to `slack` above it, relative: an MRR target's band; its own feed where that is higher): where
+/// an earlier step's feed could not be braked to a later step's allowed feed in the distance
+/// between them (changeDistance: the S-curve under `a` and `j`), the earlier step takes the
+/// highest of its F-word levels (its programmed feed times (1 + q)^n) that can be, or the
+/// later one's feed, so that the lower F word comes a braking distance ahead. Rises are left
+/// to the controller: it speeds up after the higher F word, below it meanwhile. Feeds are
+/// only ever set to levels or to other steps' feeds, so they stay levels.
+void brakeAhead(const SimulationResult& sim, std::vector<double>& feed,
+                const std::vector<double>& allowed, double slack, double q, double a, double j) {
+  if (!(a > 0.0) && !(j > 0.0)) return;
+  const auto& st = sim.steps;
+  double vMax = 0.0;
+  for (std::size_t i = 0; i < st.size(); ++i)
+    if (isFeedStep(st[i])) vMax = std::max(vMax, feed[i] / 60.0);
+  // No change between speeds up to vMax needs more than vMax T(vMax) (mean speed at most
+  // vMax, T growing with the change): farther pairs need no look.
+  const double window = vMax * changeTime(vMax, a, j);
+  const std::vector<std::size_t> runStart = feedRuns(sim);
+  for (std::size_t k = st.size(); k-- > 0;) {
+    if (!isFeedStep(st[k])) continue;
+    // The speed step k may have.
+    const double reach = std::max(allowed[k] * (1.0 + slack), feed[k]) / 60.0;
+    const double start = st[k].arcLength - st[k].length;
+    for (std::size_t i = k; i-- > runStart[k];) {
+      const double gap = start - st[i].arcLength;
+      if (gap > window) break;
+      if (!(feed[i] / 60.0 > reach) || changeDistance(reach, feed[i] / 60.0, a, j) <= gap) continue;
+      // The highest of step i's levels that can still be braked to in time (the S-curve is
+      // symmetric: braking from v to `reach` takes as long as speeding up from `reach` to v),
+      // and never below step k's own feed.
+      const double base = st[i].feed;
+      const double v = 60.0 * reachable(reach, feed[i] / 60.0, gap, a, j);
+      const double level = base * std::pow(1.0 + q, std::floor(std::log(v / base) / std::log1p(q)));
+      feed[i] = std::max(feed[k], std::min(feed[i], level));
+    }
+  }
 }
 
 /// Round feeds down to the levels F (1 + q)^k of the step's programmed feed F (k an integer):
@@ -255,10 +296,42 @@ double mrrForForce(double force, double specificEnergy, double diameter, double 
   return force * cuttingSpeed(diameter, spindleRpm) / (1000.0 * specificEnergy);
 }
 
+void physicsCaps(const SimulationResult& sim, const ScheduleOptions& o, std::vector<double>& cap,
+                 std::vector<Binding>& which) {
+  const auto& st = sim.steps;
+  cap.assign(st.size(), std::numeric_limits<double>::infinity());
+  which.assign(st.size(), Binding::None);
+  if (!o.physicsLimits()) return;
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    const StepLoad& l = sim.loads[i];
+    if (!isFeedStep(st[i]) || std::isnan(l.hMax)) continue;
+    // The feed each limit allows: the chip grows as the feed, torque and power as
+    // T_cut s^p + T_edge, the peak force as its kept values (CuttingForces.h).
+    auto lower = [&](double scale, Binding b) {
+      if (st[i].feed * scale < cap[i]) {
+        cap[i] = st[i].feed * scale;
+        which[i] = b;
+      }
+    };
+    if (o.maxChip > 0.0 && l.hMax > 0.0) lower(o.maxChip / l.hMax, Binding::Chip);
+    if (o.maxForce > 0.0) lower(scaleForPeak(l, o.maxForce), Binding::Force);
+    if (o.maxTorque > 0.0) lower(scaleForTorque(l, o.maxTorque), Binding::Torque);
+    if (o.maxPower > 0.0 && l.torque > 0.0)
+      lower(scaleForTorque(l, o.maxPower * l.torque / l.power), Binding::Power);
+  }
+}
+
+std::vector<double> machineSpeeds(const SimulationResult& sim, const std::vector<double>& feed,
+                                  double acceleration, double jerk) {
+  std::vector<double> v = feed;
+  limitAcceleration(sim, v, acceleration);
+  limitJerk(sim, v, acceleration, jerk);
+  return v;
+}
+
 double feedTime(const SimulationResult& sim, const std::vector<double>& feed, double acceleration,
                 double jerk) {
-  std::vector<double> f = feed;
-  limitMotion(sim, f, acceleration, jerk);
+  const std::vector<double> f = machineSpeeds(sim, feed, acceleration, jerk);
   double t = 0.0;
   const auto& st = sim.steps;
   for (std::size_t i = 0; i < st.size(); ++i) {
@@ -308,33 +381,6 @@ void chooseTargets(const SimulationResult& sim, const ScheduleOptions& o, Schedu
   }
   for (const auto& [tool, target] : out.targets)
     if (target > 0.0 && !(out.targetMrr > 0.0)) out.targetMrr = target;
-}
-
-/// Per step the feed its physics limits allow (infinite where none binds or no load is
-/// modelled), and which limit sets it.
-void physicsCaps(const SimulationResult& sim, const ScheduleOptions& o, std::vector<double>& cap,
-                 std::vector<Binding>& which) {
-  const auto& st = sim.steps;
-  cap.assign(st.size(), std::numeric_limits<double>::infinity());
-  which.assign(st.size(), Binding::None);
-  if (!o.physicsLimits()) return;
-  for (std::size_t i = 0; i < st.size(); ++i) {
-    const StepLoad& l = sim.loads[i];
-    if (!isFeedStep(st[i]) || std::isnan(l.hMax)) continue;
-    // The feed each limit allows: the chip grows as the feed, torque and power as
-    // T_cut s^p + T_edge, the peak force as its kept values (CuttingForces.h).
-    auto lower = [&](double scale, Binding b) {
-      if (st[i].feed * scale < cap[i]) {
-        cap[i] = st[i].feed * scale;
-        which[i] = b;
-      }
-    };
-    if (o.maxChip > 0.0 && l.hMax > 0.0) lower(o.maxChip / l.hMax, Binding::Chip);
-    if (o.maxForce > 0.0) lower(scaleForPeak(l, o.maxForce), Binding::Force);
-    if (o.maxTorque > 0.0) lower(scaleForTorque(l, o.maxTorque), Binding::Torque);
-    if (o.maxPower > 0.0 && l.torque > 0.0)
-      lower(scaleForTorque(l, o.maxPower * l.torque / l.power), Binding::Power);
-  }
 }
 
 /// Per step the feed the targets and limits want (out.wanted) and what bounds it
@@ -464,7 +510,7 @@ void settleFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
     }
   };
 
-  // Acceleration and jerk, F-word levels, short runs and unsplittable lines, until nothing
+  // Braking ahead of drops, F-word levels, short runs and unsplittable lines, until nothing
   // changes. The levels' hysteresis may lift a feed by up to half a level, which can undo a
   // motion limit (and the two can settle on lifting and lowering the same feed); so a second
   // loop repeats the same steps without hysteresis: there every step only lowers feeds, the
@@ -473,12 +519,15 @@ void settleFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
   // so the hysteresis pass is left out.
   out.feed = out.wanted;
   out.noise = loadNoise(sim, out.wanted);
+  // An MRR target's band: its levels may stay up to this above the wanted feed, and so may the
+  // machine's speed while it brakes for a lower one. A physics limit has none.
+  const double band = physics ? 0.0 : std::max(0.5 * o.minChange, out.noise);
   for (const bool hysteresis : {true, false})
     for (int round = 0; (round < 50 && !physics) || !hysteresis; ++round) {
       const std::vector<double> before = out.feed;
-      limitMotion(sim, out.feed, o.acceleration, o.jerk);
+      brakeAhead(sim, out.feed, out.wanted, band, o.minChange, o.acceleration, o.jerk);
       quantizeDown(sim, out.feed, out.wanted, floor, o.minChange, physics ? out.noise : 0.0,
-                   hysteresis ? std::max(0.5 * o.minChange, out.noise) : 0.0);
+                   hysteresis ? band : 0.0);
       mergeShortRuns(sim, out.feed, o.minSegment);
       unify(out.feed);
       if (out.feed == before) break;
@@ -559,9 +608,10 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
   out.timeBefore = feedTime(sim, programmed, o.acceleration, o.jerk);
   out.timeAfter = feedTime(sim, out.feed, o.acceleration, o.jerk);
   out.rapidTime = rapidTime(path, o.rapidFeed, o.acceleration, o.jerk);
+  out.speed = machineSpeeds(sim, out.feed, o.acceleration, o.jerk);
   for (std::size_t i = 1; i < st.size(); ++i)
     if (isFeedStep(st[i]) && isFeedStep(st[i - 1])) {
-      const double v0 = out.feed[i - 1] / 60.0, v1 = out.feed[i] / 60.0;
+      const double v0 = out.speed[i - 1] / 60.0, v1 = out.speed[i] / 60.0;
       out.maxAcceleration =
           std::max(out.maxAcceleration, std::abs(v1 * v1 - v0 * v0) / (2.0 * st[i].length));
     }

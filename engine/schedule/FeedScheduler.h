@@ -30,11 +30,14 @@ struct ScheduleOptions {
   std::map<int, double> targetByTool;
   double feedMin =
       0.0;  ///< lowest feed the scheduler may command (0: kFeedMinShare of each step's)
-  double feedMax = 0.0;       ///< highest (0: 2 x the highest programmed feed)
-  double airFeed = 0.0;       ///< feed of steps that cut nothing (0: the programmed feed)
-  double acceleration = 0.0;  ///< tangential acceleration limit (0: none)
-  /// Jerk limit, mm/s^3 (0: none): room is left between feeds for the controller's S-curve
-  /// (see changeDistance).
+  double feedMax = 0.0;  ///< highest (0: 2 x the highest programmed feed)
+  double airFeed = 0.0;  ///< feed of steps that cut nothing (0: the programmed feed)
+  /// Tangential acceleration limit, mm/s^2 (0: none), and jerk limit, mm/s^3 (0: none): every
+  /// lower F word comes a braking distance (changeDistance) ahead of the first step that needs
+  /// it, so that a machine that brakes only where the F word takes effect is down to it there;
+  /// the controller speeds up after a higher F word (below it meanwhile, cutting less). The
+  /// times and accelerations reported are those of the machine's speed (machineSpeeds).
+  double acceleration = 0.0;
   double jerk = 0.0;
   /// The machine's rapid feed, mm/min (0: rapids are not timed); rapids run from standstill
   /// to standstill under the same acceleration and jerk limits.
@@ -141,12 +144,13 @@ struct Schedule {
   std::map<int, double> targets;  ///< per tool number that cuts: its target (0: none, NoTarget)
   std::vector<double> wanted;     ///< per step: the feed that meets the target (clamped)
   std::vector<double> feed;       ///< per step: the scheduled (commanded) feed
+  std::vector<double> speed;      ///< per step: the machine's speed (machineSpeeds), mm/min
   std::vector<Binding> binding;   ///< per step: what keeps it from `wanted`
   FeedPlan plan;                  ///< per move: the pieces for GcodeWriter
   double timeBefore = 0.0;        ///< feed-move time with the programmed feeds, s
   double timeAfter = 0.0;         ///< with the scheduled feeds, s
   double rapidTime = 0.0;  ///< rapids at ScheduleOptions::rapidFeed (the same before and after), s
-  double maxAcceleration = 0.0;  ///< largest |Eq 24 acceleration| between scheduled steps, mm/s^2
+  double maxAcceleration = 0.0;  ///< largest |Eq 24 acceleration| of `speed`, mm/s^2
   std::size_t fWords = 0;        ///< feed pieces in the plan
   double feedMax = 0.0;  ///< the highest feed it may command (--feed-max, else 2 x programmed)
   std::vector<UnmetLimit> unmet;  ///< the steps whose limit holds only below their lowest feed
@@ -164,13 +168,25 @@ struct Schedule {
 /// the voxel stock's by 0.01 %.
 double loadNoise(const SimulationResult& sim, const std::vector<double>& wanted);
 
+/// Per step of `sim` (which has loads) the feed its physics limits allow, mm/min (infinite
+/// where none binds or no load is modelled), and which limit sets it (`which`).
+void physicsCaps(const SimulationResult& sim, const ScheduleOptions& o, std::vector<double>& cap,
+                 std::vector<Binding>& which);
+
 /// Schedule feeds for a simulated tool path. Throws ParameterError for inconsistent limits.
 Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
                        const ScheduleOptions& options);
 
-/// Time to run the feed steps with per-step feeds `feed` (mm/min) under an acceleration limit
-/// (mm/s^2, 0: none) and a jerk limit (mm/s^3, 0: none): each step at its feed, the changes
-/// between them at the limits (Eq 24's time between successive feeds). Seconds.
+/// The machine's speed per step (mm/min) under commanded feeds `feed` (mm/min), an
+/// acceleration limit (mm/s^2, 0: none) and a jerk limit (mm/s^3, 0: none): never above the
+/// feed, speeding up after a rise and braking ahead of a drop at the limits (Eq 24 between
+/// successive steps; with jerk, every pair of steps of one run of feed moves leaves room for
+/// the S-curve between their speeds).
+std::vector<double> machineSpeeds(const SimulationResult& sim, const std::vector<double>& feed,
+                                  double acceleration, double jerk);
+
+/// Time to run the feed steps with per-step feeds `feed` (mm/min) at the machine's speeds
+/// (machineSpeeds; Eq 24's time between successive speeds). Seconds.
 double feedTime(const SimulationResult& sim, const std::vector<double>& feed, double acceleration,
                 double jerk = 0.0);
 
