@@ -109,9 +109,11 @@ void limitJerk(const SimulationResult& sim, std::vector<double>& feed, double a,
 /// highest of its F-word levels (its programmed feed times (1 + q)^n) that can be, or the
 /// later one's feed, so that the lower F word comes a braking distance ahead. Rises are left
 /// to the controller: it speeds up after the higher F word, below it meanwhile. Feeds are
-/// only ever set to levels or to other steps' feeds, so they stay levels.
+/// only ever set to levels or to other steps' feeds, so they stay levels. `why` says per step
+/// lowered which limit did: Acceleration, or Jerk where the acceleration alone would not have.
 void brakeAhead(const SimulationResult& sim, std::vector<double>& feed,
-                const std::vector<double>& allowed, double slack, double q, double a, double j) {
+                const std::vector<double>& allowed, double slack, double q, double a, double j,
+                std::vector<Binding>& why) {
   if (!(a > 0.0) && !(j > 0.0)) return;
   const auto& st = sim.steps;
   double vMax = 0.0;
@@ -136,6 +138,10 @@ void brakeAhead(const SimulationResult& sim, std::vector<double>& feed,
       const double base = st[i].feed;
       const double v = 60.0 * reachable(reach, feed[i] / 60.0, gap, a, j);
       const double level = base * std::pow(1.0 + q, std::floor(std::log(v / base) / std::log1p(q)));
+      // Jerk where the acceleration alone would have left room for the feed it had.
+      why[i] = j > 0.0 && changeDistance(reach, feed[i] / 60.0, a, 0.0) <= gap
+                   ? Binding::Jerk
+                   : Binding::Acceleration;
       feed[i] = std::max(feed[k], std::min(feed[i], level));
     }
   }
@@ -283,6 +289,8 @@ const char* bindingName(Binding b) {
       return "power";
     case Binding::Unmodelled:
       return "unmodelled";
+    case Binding::Jerk:
+      return "jerk";
   }
   return "none";
 }
@@ -483,7 +491,8 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
 
 /// The wanted feeds made into feeds the machine can follow and F words a shop wants
 /// (out.feed): acceleration and jerk, F-word levels, short runs merged, one feed for the lines
-/// the writer cannot split; steps held below what they wanted by that marked Acceleration.
+/// the writer cannot split; steps held below what they wanted by that marked Acceleration
+/// (Jerk where braking for the jerk limit held them).
 void settleFeeds(const Toolpath& path, const SimulationResult& sim, const ScheduleOptions& o,
                  const std::vector<double>& floor, Schedule& out) {
   const auto& st = sim.steps;
@@ -522,10 +531,11 @@ void settleFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
   // An MRR target's band: its levels may stay up to this above the wanted feed, and so may the
   // machine's speed while it brakes for a lower one. A physics limit has none.
   const double band = physics ? 0.0 : std::max(0.5 * o.minChange, out.noise);
+  std::vector<Binding> motion(st.size(), Binding::Acceleration);  // what braking held a step
   for (const bool hysteresis : {true, false})
     for (int round = 0; (round < 50 && !physics) || !hysteresis; ++round) {
       const std::vector<double> before = out.feed;
-      brakeAhead(sim, out.feed, out.wanted, band, o.minChange, o.acceleration, o.jerk);
+      brakeAhead(sim, out.feed, out.wanted, band, o.minChange, o.acceleration, o.jerk, motion);
       quantizeDown(sim, out.feed, out.wanted, floor, o.minChange, physics ? out.noise : 0.0,
                    hysteresis ? band : 0.0);
       mergeShortRuns(sim, out.feed, o.minSegment);
@@ -535,7 +545,7 @@ void settleFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
   for (std::size_t i = 0; i < st.size(); ++i)
     if (isFeedStep(st[i]) && (out.binding[i] == Binding::None || physicsBinding(out.binding[i])) &&
         out.feed[i] < out.wanted[i] / (1.0 + o.minChange) - 1e-9)
-      out.binding[i] = Binding::Acceleration;
+      out.binding[i] = motion[i];
 }
 
 /// The feed plan the writer follows: per move, its runs of one feed as pieces; the F words.

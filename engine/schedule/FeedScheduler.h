@@ -93,7 +93,8 @@ enum class Binding {
   Force,
   Torque,
   Power,
-  Unmodelled
+  Unmodelled,
+  Jerk  ///< held to brake in time by the jerk limit, where the acceleration alone would not
 };
 
 /// One physics limit of a schedule: what a step it binds is marked, the option that sets it,

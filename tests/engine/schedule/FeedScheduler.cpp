@@ -440,6 +440,14 @@ TEST_CASE("before a load step the F words come down a braking distance ahead", "
     CHECK(std::sqrt(std::max(v - 10.005, 0.0) / 100.0) * (v + 10.005) <= 119.0 - i + 1e-9);
   }
   CHECK(sj.feed[119] == Approx(600.0).epsilon(1e-12));  // no room at all: the step before
+  // The steps it holds say so: the jerk, not an acceleration (there is none).
+  std::size_t heldByJerk = 0;
+  for (int i = 0; i < 120; ++i)
+    if (sj.feed[i] < sj.wanted[i] / 1.001 - 1e-9) {
+      CHECK(sj.binding[i] == Binding::Jerk);
+      ++heldByJerk;
+    }
+  CHECK(heldByJerk > 20);
 }
 
 TEST_CASE("a jerk limit binds: the machine speeds up along an S-curve after one F word",
