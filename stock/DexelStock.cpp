@@ -190,9 +190,11 @@ DexelStock DexelStock::box(const Box3& b, double spacing) {
 }
 
 DexelStock DexelStock::fromColumns(double x0, double y0, double spacing, int nx, int ny,
-                                   std::vector<std::vector<Interval>> rays) {
+                                   std::vector<std::vector<Interval>> rays,
+                                   std::vector<double> weights) {
   if (nx <= 0 || ny <= 0 ||
-      rays.size() != static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny))
+      rays.size() != static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) ||
+      (!weights.empty() && weights.size() != rays.size()))
     throw ParameterError("dexel columns: expected " + std::to_string(nx) + " x " +
                          std::to_string(ny) + " rays, found " + std::to_string(rays.size()));
   Box3 b;
@@ -207,7 +209,10 @@ DexelStock DexelStock::fromColumns(double x0, double y0, double spacing, int nx,
   DexelStock s(b, spacing);
   s.nx_ = nx;  // (the box's rounding could add a column)
   s.ny_ = ny;
-  s.weight_.assign(rays.size(), 1.0);
+  if (weights.empty())
+    s.weight_.assign(rays.size(), 1.0);
+  else
+    s.weight_ = std::move(weights);
   s.rays_ = std::move(rays);
   return s;
 }

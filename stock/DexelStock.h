@@ -85,10 +85,12 @@ class DexelStock : public Stock {
   const std::vector<Interval>& ray(int i, int j) const { return rays_[index(i, j)]; }
   double weight(int i, int j) const { return weight_[index(i, j)]; }
   /// Columns of `spacing` from (x0, y0): nx x ny rays (row by row, x fastest) with their
-  /// material intervals, bottom up, each column whole (weight 1). For stocks built elsewhere
-  /// (VoxelStock::dexelsFromVdb). Throws ParameterError when no ray holds material.
+  /// material intervals, bottom up, each column whole (weight 1) unless `weights` gives each
+  /// column's share. For stocks built elsewhere (VoxelStock::dexelsFromVdb). Throws
+  /// ParameterError when no ray holds material.
   static DexelStock fromColumns(double x0, double y0, double spacing, int nx, int ny,
-                                std::vector<std::vector<Interval>> rays);
+                                std::vector<std::vector<Interval>> rays,
+                                std::vector<double> weights = {});
 
   /// Record, for every removal, where each column lost material and which step removed it
   /// (for removed.vdb, written by VoxelStock::writeRemovedVdb).

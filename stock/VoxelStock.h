@@ -70,9 +70,11 @@ class VoxelStock : public Stock {
   /// (the active voxels' bounds OpenVDB writes with each grid) without reading the grid;
   /// nullopt when the file or that metadata cannot be read (fromVdb then says why).
   static std::optional<Box3> fileBounds(const std::string& path);
-  /// The same stock as dexels of spacing h: each column of the resampled voxels becomes a ray;
-  /// a partial voxel whose fractions change mostly along z is a shorter piece of the column
-  /// (a floor or a top), otherwise the whole piece with its fraction as the column's share.
+  /// The same stock as dexels of spacing h: a dexel run's own rays where the file holds them
+  /// at this spacing (writeStockVdb), exactly; else each column of the resampled voxels
+  /// becomes a ray: a partial voxel whose fractions change mostly along z is a shorter piece
+  /// of the column (a floor or a top), otherwise the whole piece with its fraction as the
+  /// column's share.
   static DexelStock dexelsFromVdb(const std::string& path, double spacing);
   /// The material of a dexel stock as volume fractions on voxels of its ray spacing (for
   /// stock.vdb and stock.stl of dexel runs): each voxel gets the share of the columns it
@@ -114,9 +116,13 @@ class VoxelStock : public Stock {
 
   /// Write stock.vdb: grid "stock" (material fraction), grid "surface" (the stock's surface
   /// as a narrow-band level set, negative inside, 3 voxels each side) and grids "planes_0",
-  /// "planes_1" (each partial voxel's planes, which fromVdb reads back). Written to a
-  /// temporary name and renamed when complete. Throws Error on I/O failure.
-  void writeStockVdb(const std::string& path) const;
+  /// "planes_1" (each partial voxel's planes, which fromVdb reads back). With `rays` (a
+  /// dexel run, whose voxels these are: fromDexels), also its rays exactly: grids
+  /// "dexel_z0", "dexel_z1", "dexel_f" (double; the n-th interval of ray (i, j) at (i, j, n))
+  /// and "dexel_weight" (columns covered in part), with the rays' origin, spacing and counts
+  /// as metadata, which dexelsFromVdb reads back at the same spacing. Written to a temporary
+  /// name and renamed when complete. Throws Error on I/O failure.
+  void writeStockVdb(const std::string& path, const DexelStock* rays = nullptr) const;
   /// The signed distance (mm, negative inside) to the stock's surface, the 0.5 iso-surface of
   /// the fractions, at each voxel centre within 3 voxels of it: stock.vdb's grid "surface".
   std::vector<std::pair<Eigen::Vector3d, double>> surfaceBand() const;

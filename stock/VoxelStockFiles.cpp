@@ -689,8 +689,102 @@ VoxelStock VoxelStock::fromVdb(const std::string& path, double h) {
   return VoxelStock(std::move(impl));
 }
 
+namespace {
+
+/// A dexel stock's rays as grids (VoxelStock::writeStockVdb).
+openvdb::GridPtrVec dexelGrids(const DexelStock& d, const openvdb::math::Transform& xf) {
+  openvdb::DoubleGrid::Ptr g[4];
+  const char* names[4] = {"dexel_z0", "dexel_z1", "dexel_f", "dexel_weight"};
+  for (int k = 0; k < 4; ++k) {
+    g[k] = openvdb::DoubleGrid::create(0.0);
+    g[k]->setTransform(xf.copy());
+    g[k]->setName(names[k]);
+    g[k]->setGridClass(openvdb::GRID_UNKNOWN);
+  }
+  auto z0 = g[0]->getAccessor();
+  auto z1 = g[1]->getAccessor();
+  auto f = g[2]->getAccessor();
+  auto w = g[3]->getAccessor();
+  for (int j = 0; j < d.raysY(); ++j)
+    for (int i = 0; i < d.raysX(); ++i) {
+      const auto& ray = d.ray(i, j);
+      for (std::size_t n = 0; n < ray.size(); ++n) {
+        const Coord c(i, j, static_cast<int>(n));
+        z0.setValue(c, ray[n].z0);
+        z1.setValue(c, ray[n].z1);
+        f.setValue(c, ray[n].f);
+      }
+      if (d.weight(i, j) != 1.0) w.setValue(Coord(i, j, 0), d.weight(i, j));
+    }
+  g[0]->insertMeta("dexel_x0", openvdb::DoubleMetadata(d.originX()));
+  g[0]->insertMeta("dexel_y0", openvdb::DoubleMetadata(d.originY()));
+  g[0]->insertMeta("dexel_spacing", openvdb::DoubleMetadata(d.resolution()));
+  g[0]->insertMeta("dexel_nx", openvdb::Int32Metadata(d.raysX()));
+  g[0]->insertMeta("dexel_ny", openvdb::Int32Metadata(d.raysY()));
+  return {g[0], g[1], g[2], g[3]};
+}
+
+/// The rays a dexel run wrote into `path` (dexelGrids), when they are there at spacing h.
+std::optional<DexelStock> exactDexels(const std::string& path, double h) {
+  openvdb::GridBase::Ptr g[4];
+  try {
+    openvdb::io::File file(path);
+    file.open(false);
+    const char* names[4] = {"dexel_z0", "dexel_z1", "dexel_f", "dexel_weight"};
+    for (int k = 0; k < 4; ++k) {
+      if (!file.hasGrid(names[k])) return std::nullopt;
+      g[k] = file.readGrid(names[k]);
+    }
+    file.close();
+  } catch (const openvdb::Exception&) {
+    return std::nullopt;
+  }
+  openvdb::DoubleGrid::Ptr d[4];
+  for (int k = 0; k < 4; ++k)
+    if (!(d[k] = openvdb::gridPtrCast<openvdb::DoubleGrid>(g[k]))) return std::nullopt;
+  const auto x0 = d[0]->getMetadata<openvdb::DoubleMetadata>("dexel_x0");
+  const auto y0 = d[0]->getMetadata<openvdb::DoubleMetadata>("dexel_y0");
+  const auto spacing = d[0]->getMetadata<openvdb::DoubleMetadata>("dexel_spacing");
+  const auto nx = d[0]->getMetadata<openvdb::Int32Metadata>("dexel_nx");
+  const auto ny = d[0]->getMetadata<openvdb::Int32Metadata>("dexel_ny");
+  if (!x0 || !y0 || !spacing || !nx || !ny || nx->value() <= 0 || ny->value() <= 0 ||
+      !(std::abs(spacing->value() - h) <= 1e-12 * h))
+    return std::nullopt;
+  const std::size_t count =
+      static_cast<std::size_t>(nx->value()) * static_cast<std::size_t>(ny->value());
+  std::vector<std::vector<DexelStock::Interval>> rays(count);
+  std::vector<double> weights(count, 1.0);
+  auto z1 = d[1]->getConstAccessor();
+  auto f = d[2]->getConstAccessor();
+  for (auto it = d[0]->cbeginValueOn(); it; ++it) {
+    const Coord c = it.getCoord();
+    if (c.x() < 0 || c.y() < 0 || c.z() < 0 || c.x() >= nx->value() || c.y() >= ny->value())
+      return std::nullopt;
+    auto& ray = rays[static_cast<std::size_t>(c.y()) * static_cast<std::size_t>(nx->value()) +
+                     static_cast<std::size_t>(c.x())];
+    if (ray.size() <= static_cast<std::size_t>(c.z())) ray.resize(c.z() + 1);
+    ray[static_cast<std::size_t>(c.z())] = {*it, z1.getValue(c), f.getValue(c)};
+  }
+  for (auto it = d[3]->cbeginValueOn(); it; ++it) {
+    const Coord c = it.getCoord();
+    if (c.x() < 0 || c.y() < 0 || c.x() >= nx->value() || c.y() >= ny->value()) return std::nullopt;
+    weights[static_cast<std::size_t>(c.y()) * static_cast<std::size_t>(nx->value()) +
+            static_cast<std::size_t>(c.x())] = *it;
+  }
+  for (const auto& ray : rays)
+    for (std::size_t n = 0; n < ray.size(); ++n)
+      if (!(ray[n].z1 > ray[n].z0) || (n > 0 && ray[n].z0 < ray[n - 1].z1))
+        return std::nullopt;  // (a hole in the intervals: not what a run wrote)
+  return DexelStock::fromColumns(x0->value(), y0->value(), h, nx->value(), ny->value(),
+                                 std::move(rays), std::move(weights));
+}
+
+}  // namespace
+
 DexelStock VoxelStock::dexelsFromVdb(const std::string& path, double h) {
-  const FloatGrid::Ptr grid = resampledFractions(readStockGrid(path), h);
+  const StockFile file = readStockGrid(path);  // (checks the file and its grid "stock")
+  if (std::optional<DexelStock> exact = exactDexels(path, h)) return std::move(*exact);
+  const FloatGrid::Ptr grid = resampledFractions(file, h);
   const CoordBBox bb = grid->evalActiveVoxelBoundingBox();
   if (bb.empty()) throw ParameterError("stock '" + path + "' holds no material");
   const int nx = bb.dim().x(), ny = bb.dim().y();
@@ -745,7 +839,7 @@ DexelStock VoxelStock::dexelsFromVdb(const std::string& path, double h) {
                                  std::move(rays));
 }
 
-void VoxelStock::writeStockVdb(const std::string& path) const {
+void VoxelStock::writeStockVdb(const std::string& path, const DexelStock* rays) const {
   const FloatGrid& grid = *impl_->grid;
   const double h = impl_->h;
   const FloatGrid::Ptr surface = surfaceLevelSet(grid, h, 3, impl_->surfaceMesh()->points);
@@ -780,7 +874,11 @@ void VoxelStock::writeStockVdb(const std::string& path) const {
       if (outer.n.squaredNorm() > 0.0) p2.setValue(c, encodePlane(outer, false));
     }
   }
-  writeVdb(path, openvdb::GridPtrVec{impl_->grid, surface, planes[0], planes[1], planes[2]});
+  openvdb::GridPtrVec grids{impl_->grid, surface, planes[0], planes[1], planes[2]};
+  if (rays)
+    for (const openvdb::GridBase::Ptr& g : dexelGrids(*rays, grid.transform()))
+      grids.push_back(g);
+  writeVdb(path, grids);
 }
 
 void VoxelStock::writeRemovedVdb(const std::string& path) const {

@@ -14,6 +14,10 @@ namespace engage {
 StockView::StockView(const RunResult& result) : result_(result) {}
 StockView::~StockView() = default;
 
+const DexelStock* StockView::dexels() const {
+  return dynamic_cast<const DexelStock*>(result_.stock.get());
+}
+
 const VoxelStock* StockView::voxels() const {
   if (const auto* voxels = dynamic_cast<const VoxelStock*>(result_.stock.get())) return voxels;
   const auto* dexels = dynamic_cast<const DexelStock*>(result_.stock.get());
@@ -64,7 +68,7 @@ std::size_t writeStockFiles(const RunResult& result, const StockView& view,
     return 0;
   }
   if (!dexels) run(0, [&] { shown->writeRemovedVdb((dir / "removed.vdb").string()); });
-  run(1, [&] { shown->writeStockVdb((dir / "stock.vdb").string()); });
+  run(1, [&] { shown->writeStockVdb((dir / "stock.vdb").string(), dexels); });
   std::size_t openEdges = 0;
   run(2,
       [&] { openEdges = shown->writeStl((dir / "stock.stl").string(), result.job.stlTriangles); });
@@ -74,7 +78,8 @@ std::size_t writeStockFiles(const RunResult& result, const StockView& view,
 }
 
 void writeStockVdb(const StockView& view, const std::filesystem::path& dir) {
-  if (const VoxelStock* shown = view.voxels()) shown->writeStockVdb((dir / "stock.vdb").string());
+  if (const VoxelStock* shown = view.voxels())
+    shown->writeStockVdb((dir / "stock.vdb").string(), view.dexels());
 }
 
 }  // namespace engage

@@ -14,6 +14,7 @@
 
 namespace engage {
 
+class DexelStock;
 class VoxelStock;
 
 /// A run's final stock as voxels, for the files and the report's 3D view that show it: the
@@ -27,6 +28,8 @@ class StockView {
   StockView& operator=(const StockView&) = delete;
   /// nullptr without a stock.
   const VoxelStock* voxels() const;
+  /// The run's dexel stock (nullptr: a voxel stock or none).
+  const DexelStock* dexels() const;
 
  private:
   const RunResult& result_;
