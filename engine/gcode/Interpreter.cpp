@@ -325,9 +325,18 @@ Interpreter::Words Interpreter::collect(const Block& b) {
       const int code = codeOf(word.value);
       const int group = L == 'G' ? gGroup(code) : (code % 10 ? -1 : mGroup(code));
       if (group < 0) {
-        if (L == 'M' && code >= 1000 && code <= 1990)
-          fail(word.column, "expected a built-in M code, found " + codeName('M', code) +
-                                " (user M codes M100-M199 are not interpreted)");
+        // An M code engage does not know moves no axis on the machines it reads for (Haas
+        // M31/M33 chip conveyor, LinuxCNC's user M100-M199 scripts, ...): taken as inert, and
+        // named in the run's warnings. Haas M96/M97 jump within the program: refused.
+        if (L == 'M' && code % 10 == 0 && code != 960 && code != 970) {
+          out_.inert.push_back({code / 10, file_, line_ + 1});
+          continue;
+        }
+        if (L == 'M' && (code == 960 || code == 970))
+          fail(word.column,
+               "expected an M code engage interprets, found " + codeName('M', code) + " (Haas " +
+                   (code == 960 ? "M96 jump on an input" : "M97 local subprogram call") +
+                   ": not interpreted; use M98 with an O-numbered subprogram)");
         fail(word.column,
              std::string("expected a known ") + L + " code, found " + codeName(L, code));
       }
@@ -654,7 +663,8 @@ void Interpreter::nonModal(int code, const Words& w) {
       return;
     }
     case G_92: {  // G92: offsets so that the current point takes the given values
-      if (!(w.has('X') || w.has('Y') || w.has('Z')))
+      // (A rotary or UVW word alone, "G92 A0", offsets an axis engage does not move: nothing.)
+      if (!(w.has('X') || w.has('Y') || w.has('Z') || w.otherAxes))
         fail(column, "expected axis words with G92, found none");
       const int cs = static_cast<int>(params_[5220]);
       const std::size_t base = static_cast<std::size_t>(5221 + 20 * (cs - 1));

@@ -111,6 +111,13 @@ struct Toolpath {
   /// none, and what it is.
   int latheLine = 0;
   std::string lathe;
+  /// M codes taken as machine functions that move no axis (a chip conveyor, a user M code
+  /// whose script lives on the machine): each with where it is (file index, 1-based line).
+  struct InertCode {
+    int code = 0;  ///< the M number
+    int file = 0, line = 0;
+  };
+  std::vector<InertCode> inert;
 };
 
 /// Arcs: radius in the plane, mm.

@@ -484,6 +484,29 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
   const Job& job = result.job;
   auto length = [&](double v) { return formatQuantity(v, Dimension::Length, job.units); };
   std::vector<std::string> w;
+  // M codes taken as moving nothing, each with its first lines.
+  {
+    std::map<int, std::vector<std::string>> where;
+    for (const Toolpath::InertCode& c : job.path.inert) {
+      auto& at = where[c.code];
+      const std::string place =
+          (c.file == 0 ? std::string() : job.path.files[static_cast<std::size_t>(c.file)] + ":") +
+          std::to_string(c.line);
+      if (at.size() < 4 && std::find(at.begin(), at.end(), place) == at.end()) at.push_back(place);
+    }
+    std::string list;
+    for (const auto& [code, at] : where) {
+      std::string lines;
+      for (const std::string& a : at)
+        lines += (lines.empty() ? "" : ", ") + a;
+      list += (list.empty() ? "" : "; ") +
+              ("M" + std::to_string(code) + (at.size() > 1 ? " (lines " : " (line ") + lines + ")");
+    }
+    if (!where.empty())
+      w.push_back(list +
+                  ": M codes engage does not know, taken as machine functions that move no axis "
+                  "(a chip conveyor, a user M code's script); check them on the machine");
+  }
   // Where the answer cannot be trusted: a grid too coarse for the tool or the stock.
   // The diameter the narrowest-cutting tool engages at the program's depths (Resolution.h).
   const ProgramEngagement& e = job.cellChoice.engagement;

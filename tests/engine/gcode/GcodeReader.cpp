@@ -573,7 +573,9 @@ TEST_CASE("a machine: G53, G28 and G30 where it puts them, its start, its travel
 
 TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]") {
   CHECK_THAT(errorOf("G12 X1\n"), Contains("test.ngc:1:1: expected a known G code, found G12"));
-  CHECK_THAT(errorOf("M123\n"), Contains("found M123 (user M codes"));
+  CHECK_THAT(errorOf("M97 P100\n"),
+             Contains("test.ngc:1:1: expected an M code engage interprets, found M97 (Haas M97 "
+                      "local subprogram call"));
   CHECK_THAT(
       errorOf("G1 G2 X1 F1\n"),
       Contains("1:4: expected at most one G code of modal group 1 per line, found G1 and G2"));
@@ -663,4 +665,20 @@ TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]"
 
 TEST_CASE("a program without end is refused at 1 GiB", "[gcode]") {
   CHECK_THROWS_WITH(readProgram("/dev/zero"), Contains("larger than 1 GiB"));
+}
+
+TEST_CASE("M codes that move nothing are kept out of the path and named", "[gcode]") {
+  // Haas M31/M33 (chip auger), LinuxCNC's user M123 (a script on the machine): no move, no
+  // error; each with its line, in order. G92 with a rotary word alone offsets an axis engage
+  // does not move (LinuxCNC takes "G92 A0"): nothing changes in XYZ.
+  const Toolpath p = run("G21 G90\nG0 X0 Y0 Z5\nM31\nG1 X10 F100 M123\nG92 A0\nM33\nG1 X20\nM2\n");
+  REQUIRE(p.moves.size() == 3);
+  CHECK(p.moves[2].end.isApprox(Eigen::Vector3d(20, 0, 5)));
+  REQUIRE(p.inert.size() == 3);
+  CHECK(p.inert[0].code == 31);
+  CHECK(p.inert[0].line == 3);
+  CHECK(p.inert[1].code == 123);
+  CHECK(p.inert[1].line == 4);
+  CHECK(p.inert[2].code == 33);
+  CHECK(p.inert[2].line == 6);
 }

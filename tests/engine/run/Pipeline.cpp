@@ -142,6 +142,10 @@ TEST_CASE("warnings where the answer cannot be trusted", "[run]") {
   };
   using Catch::Matchers::Contains;
   CHECK(warningsOf(test::slotProgram(), {}).empty());
+  // M codes engage does not know, each named with its lines.
+  CHECK_THAT(warningsOf("G21 G90\nM31\nG0 X0 Y0 Z5\nM31\nM100\nG1 Z-2 F100\nG1 X30 F600\nM2\n", {}),
+             Contains("M31 (lines 2, 4); M100 (line 5): M codes engage does not know, taken as "
+                      "machine functions that move no axis"));
   // 6 mm tool, 1.5 mm voxels: 4 across it.
   CHECK_THAT(warningsOf(test::slotProgram(), {{"voxel", "1.5"}}),
              Contains("fewer than 5 cells across it"));
