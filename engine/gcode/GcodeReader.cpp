@@ -45,8 +45,13 @@ Toolpath readPrograms(const std::vector<std::string>& paths, const ReaderOptions
         all.blocks.push_back(std::move(b));
       }
     }
+    for (Toolpath::InertCode c : one.inert) {
+      c.file += files;
+      all.inert.push_back(c);
+    }
     all.files.insert(all.files.end(), one.files.begin(), one.files.end());
     all.inch = one.inch;
+    all.unitsSet = all.unitsSet || one.unitsSet;
     if (all.latheLine == 0 && one.latheLine != 0) {
       all.latheLine = one.latheLine;
       all.lathe = one.lathe;

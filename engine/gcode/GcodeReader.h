@@ -55,6 +55,8 @@ struct MachineSetup {
   Eigen::Vector3d g30{0.0, 0.0, 0.0};
   Eigen::Vector3d start{0.0, 0.0, 0.0};  ///< the tool tip when the program starts
   bool limited = false;                  ///< travel limits given
+  bool startInch = false;                ///< "startup_units": "in" (G20 at power-on)
+  bool startUnitsGiven = false;          ///< the file says "startup_units"
   Eigen::Vector3d travelMin{0.0, 0.0, 0.0}, travelMax{0.0, 0.0, 0.0};
 };
 
@@ -91,6 +93,9 @@ struct ReaderOptions {
   Eigen::Vector3d start{0.0, 0.0, 0.0};
   int startTool = 0;
   bool startKnown = false;
+  /// The machine's start-up units are inches (G20 until the program says G21): Haas and
+  /// Fanuc machines set up in inches, whose posts may write neither.
+  bool startInch = false;
 };
 
 /// Read and interpret a program file. Throws GcodeError ("file:line:col: expected ..., found

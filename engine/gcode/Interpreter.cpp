@@ -77,6 +77,11 @@ Interpreter::Interpreter(const ReaderOptions& options) : options_(options) {
     pos_ = options.startKnown ? Vector3d(options.start + m->workOffset) : m->start;
     startKnown_ = true;
   }
+  // The machine's start-up units: the stored lengths above are mm, held in program units.
+  if (options.startInch) {
+    convertStoredLengths(1.0 / kInch);
+    inch_ = true;
+  }
 }
 
 Toolpath Interpreter::run(std::unique_ptr<SourceFile> main) {
@@ -453,6 +458,7 @@ void Interpreter::modes(Words& w) {
     fail(w.gColumn(G_4), "expected a P word (seconds) with G4, found none");
   if (const auto g = w.gIn(2)) plane_ = *g == G_17 ? Plane::XY : *g == G_18 ? Plane::XZ : Plane::YZ;
   if (const auto g = w.gIn(6)) {
+    out_.unitsSet = true;
     const bool inch = *g == G_20;
     if (inch != inch_) {
       convertStoredLengths(inch ? 1.0 / kInch : kInch);

@@ -107,6 +107,7 @@ struct Toolpath {
   std::vector<std::string> files;   ///< source files (main program first, then subroutine files)
   std::vector<SourceBlock> blocks;  ///< executed lines that produced moves, in execution order
   bool inch = false;                ///< the program's units (the last G20/G21 seen)
+  bool unitsSet = false;            ///< the program says G20 or G21 (else the start-up units)
   /// A lathe program: the first line that says so (G7 diameter mode, a turning cycle), 0 if
   /// none, and what it is.
   int latheLine = 0;

@@ -398,6 +398,11 @@ std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& valu
   ro.dialect = dialectOf(text("dialect"));
   ro.blockDelete = text("block-delete") == "true";
   if (!text("machine").empty()) ro.machine = readMachine(text("machine"));
+  // The start-up units: --startup-units, else the machine file's.
+  const std::string startup = text("startup-units");
+  ro.startInch = !startup.empty() ? unitSystemNamed(startup) == UnitSystem::Inch
+                                  : ro.machine && ro.machine->startInch;
+  job.startupUnitsGiven = !startup.empty() || (ro.machine && ro.machine->startUnitsGiven);
   job.toolTableInch = ro.toolTableInch;
   job.toolsFile = text("tools");
   // A CAMotics project: its programs, its tool table (unless --tools), its workpiece (unless

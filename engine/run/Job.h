@@ -53,6 +53,9 @@ struct Job {
   std::string toolsFile;       ///< --tools, as given ("" for none)
   std::string toolsFormat;     ///< its format: linuxcnc, fusion360, freecad, camotics
   bool toolTableInch = false;  ///< a LinuxCNC table's lengths are inches (--tool-table-units in)
+  /// The machine's start-up units were given (--startup-units, a machine file's
+  /// startup_units): a program that sets neither G20 nor G21 is read in them without a warning.
+  bool startupUnitsGiven = false;
   /// With --tools: the library's entries of the tools the program loads, by number.
   std::map<int, ToolEntry> tools;
   /// With --tools and no --tool: the tool taken to be in the spindle before the program's

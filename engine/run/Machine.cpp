@@ -21,9 +21,10 @@ MachineSetup readMachine(const std::string& path) {
   if (!doc.is_object()) throw Error(path + ": expected a JSON object (a machine description)");
   for (const auto& [key, value] : doc.items())
     if (key != "units" && key != "work_offset" && key != "g28" && key != "g30" && key != "start" &&
-        key != "travel" && key != "name")
+        key != "travel" && key != "name" && key != "startup_units")
       throw Error(path + ": unknown key \"" + key +
-                  "\" (expected units, work_offset, g28, g30, start, travel, name)");
+                  "\" (expected units, work_offset, g28, g30, start, travel, startup_units, "
+                  "name)");
   double unit = 1.0;
   if (doc.contains("units")) {
     const json& u = doc["units"];
@@ -45,6 +46,13 @@ MachineSetup readMachine(const std::string& path) {
   };
   MachineSetup m;
   m.name = path;
+  if (doc.contains("startup_units")) {
+    const json& u = doc["startup_units"];
+    if (!u.is_string() || (u != "mm" && u != "in"))
+      throw Error(path + ": \"startup_units\" must be \"mm\" or \"in\", found " + u.dump());
+    m.startInch = u == "in";
+    m.startUnitsGiven = true;
+  }
   if (doc.contains("work_offset")) m.workOffset = point(doc["work_offset"], "work_offset");
   if (doc.contains("g28")) m.g28 = point(doc["g28"], "g28");
   if (doc.contains("g30")) m.g30 = point(doc["g30"], "g30");

@@ -97,6 +97,9 @@ std::vector<OptionInfo> makeTable() {
       plain("tool-table", K::Text, G::Simulation, "", "LinuxCNC tool table for G43"),
       choice("tool-table-units", G::Simulation, {"mm", "in", "inch"}, "mm",
              "units of the tool table's lengths: mm or in"),
+      choice("startup-units", G::Simulation, {"mm", "in", "inch"}, "",
+             "the machine's units at start-up, for a program that sets neither G20 nor G21 "
+             "(default: the machine file's startup_units, else mm)"),
       choice("dialect", G::Simulation, {"linuxcnc", "fanuc", "grbl"}, "linuxcnc",
              "the controller the program is for: linuxcnc, fanuc (M98 P with the count in its "
              "leading digits) or grbl (ignores an arc's off-plane centre word)"),

@@ -484,6 +484,12 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
   const Job& job = result.job;
   auto length = [&](double v) { return formatQuantity(v, Dimension::Length, job.units); };
   std::vector<std::string> w;
+  // Units nobody gave: the program sets neither G20 nor G21 and the machine's are assumed.
+  if (!job.path.unitsSet && !job.startupUnitsGiven && !job.path.moves.empty())
+    w.push_back(
+        "the program sets neither G20 nor G21: read in mm, as a machine that starts up "
+        "in mm would (give the machine's start-up units: --startup-units in, or "
+        "\"startup_units\" in the --machine file)");
   // M codes taken as moving nothing, each with its first lines.
   {
     std::map<int, std::vector<std::string>> where;

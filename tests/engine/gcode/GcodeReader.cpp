@@ -682,3 +682,23 @@ TEST_CASE("M codes that move nothing are kept out of the path and named", "[gcod
   CHECK(p.inert[2].code == 33);
   CHECK(p.inert[2].line == 6);
 }
+
+TEST_CASE("a program that sets neither G20 nor G21 is read in the machine's start-up units",
+          "[gcode]") {
+  // Two Haas posts and Estlcam write no G20 for machines that start up in inches.
+  const std::string text = "G90\nG0 X1 Y0 Z0.2\nG1 Z-0.05 F10\nG1 X2\nM2\n";
+  const Toolpath mm = run(text);
+  CHECK_FALSE(mm.unitsSet);
+  CHECK_FALSE(mm.inch);
+  CHECK(mm.moves.back().end.isApprox(Eigen::Vector3d(2, 0, -0.05)));
+  ReaderOptions o;
+  o.startInch = true;
+  const Toolpath in = run(text, o);
+  CHECK(in.inch);
+  CHECK(in.moves.back().end.isApprox(Eigen::Vector3d(50.8, 0, -1.27)));  // 2 in, -0.05 in
+  CHECK(in.moves.back().feed == Approx(254.0));                          // F10 in/min
+  // A G21 in the program wins over the start-up units, and says the units are set.
+  const Toolpath set = run("G21\n" + text, o);
+  CHECK(set.unitsSet);
+  CHECK(set.moves.back().end.isApprox(Eigen::Vector3d(2, 0, -0.05)));
+}

@@ -43,11 +43,18 @@ TEST_CASE("a machine description: positions in mm or inches, the start at G28 or
   CHECK(i.workOffset.x() == Approx(-254.0).margin(1e-12));
   CHECK(i.start.x() == Approx(-25.4).margin(1e-12));
   CHECK_FALSE(i.limited);
+  CHECK_FALSE(i.startUnitsGiven);
+  // The units it starts up in (G20 at power-on), apart from the file's own units.
+  const MachineSetup h = readMachine(dir.write("haas.json", R"({"startup_units": "in"})"));
+  CHECK(h.startInch);
+  CHECK(h.startUnitsGiven);
 }
 
 TEST_CASE("a machine description that cannot be right is refused, naming the key", "[machine]") {
   CHECK_THAT(errorOf(R"({"home": [0, 0, 0]})"), Contains("unknown key \"home\""));
   CHECK_THAT(errorOf(R"({"units": "cm"})"), Contains("\"units\" must be \"mm\" or \"in\""));
+  CHECK_THAT(errorOf(R"({"startup_units": "inch"})"),
+             Contains("\"startup_units\" must be \"mm\" or \"in\", found \"inch\""));
   CHECK_THAT(errorOf(R"({"g28": [0, 0]})"), Contains("\"g28\" must be [x, y, z]"));
   CHECK_THAT(errorOf(R"({"travel": {"min": [0, 0, 0], "max": [-1, 10, 10]}})"),
              Contains("min must not exceed max along X"));

@@ -142,6 +142,10 @@ TEST_CASE("warnings where the answer cannot be trusted", "[run]") {
   };
   using Catch::Matchers::Contains;
   CHECK(warningsOf(test::slotProgram(), {}).empty());
+  // A program without G20 or G21, read in mm unless the start-up units are given.
+  const std::string noUnits = "G90\nG0 X0 Y0 Z5\nG1 Z-2 F100\nG1 X30 F600\nM2\n";
+  CHECK_THAT(warningsOf(noUnits, {}), Contains("the program sets neither G20 nor G21: read in mm"));
+  CHECK(warningsOf(noUnits, {{"startup-units", "mm"}}).empty());
   // M codes engage does not know, each named with its lines.
   CHECK_THAT(warningsOf("G21 G90\nM31\nG0 X0 Y0 Z5\nM31\nM100\nG1 Z-2 F100\nG1 X30 F600\nM2\n", {}),
              Contains("M31 (lines 2, 4); M100 (line 5): M codes engage does not know, taken as "
