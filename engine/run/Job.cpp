@@ -12,7 +12,10 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <limits>
+#include <optional>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 
@@ -387,6 +390,27 @@ void refuseMissing(JobCommand command, const OptionValues& values, const std::st
 }
 
 /// The job's program read (a CAMotics project's programs one after the other) with the tool
+/// Whether a program's first G20 or G21 (outside comments) says inches; nullopt when it has
+/// neither or cannot be read (the reader then says why).
+std::optional<bool> firstUnitsWord(const std::string& path) {
+  if (path.empty()) return std::nullopt;
+  std::ifstream in(path);
+  static const std::regex units(R"(G\s*0*2\s*([01])(?![0-9.]))", std::regex::icase);
+  for (std::string line; std::getline(in, line);) {
+    std::string code;
+    int depth = 0;
+    for (const char c : line) {
+      if (c == ';' && depth == 0) break;
+      if (c == '(') ++depth;
+      if (depth == 0) code += c;
+      if (c == ')' && depth > 0) --depth;
+    }
+    std::smatch m;
+    if (std::regex_search(code, m, units)) return m[1] == "0";
+  }
+  return std::nullopt;
+}
+
 /// library that gives its tools (--tools, or the project's table); the project, if it is one.
 std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& values,
                                               std::optional<ToolLibrary>& library) {
@@ -394,7 +418,8 @@ std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& valu
   const JobCommand command = job.command;
   ReaderOptions ro;
   ro.toolTable = text("tool-table");
-  ro.toolTableInch = unitSystemNamed(text("tool-table-units")) == UnitSystem::Inch;
+  // A LinuxCNC tool table's numbers: --tool-table-units, else the program's units (its first
+  // G20 or G21, else the start-up units).
   ro.dialect = dialectOf(text("dialect"));
   ro.blockDelete = text("block-delete") == "true";
   if (!text("machine").empty()) ro.machine = readMachine(text("machine"));
@@ -403,6 +428,13 @@ std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& valu
   ro.startInch = !startup.empty() ? unitSystemNamed(startup) == UnitSystem::Inch
                                   : ro.machine && ro.machine->startInch;
   job.startupUnitsGiven = !startup.empty() || (ro.machine && ro.machine->startUnitsGiven);
+  if (!text("tool-table-units").empty()) {
+    ro.toolTableInch = unitSystemNamed(text("tool-table-units")) == UnitSystem::Inch;
+  } else {
+    const std::optional<bool> inch =
+        firstUnitsWord(isCamoticsProject(job.program) ? std::string() : job.program);
+    ro.toolTableInch = inch ? *inch : ro.startInch;
+  }
   job.toolTableInch = ro.toolTableInch;
   job.toolsFile = text("tools");
   // A CAMotics project: its programs, its tool table (unless --tools), its workpiece (unless

@@ -95,8 +95,9 @@ std::vector<OptionInfo> makeTable() {
       choice("units", G::Output, {"mm", "in", "inch"}, "",
              "report units: mm or in (default: the program's)"),
       plain("tool-table", K::Text, G::Simulation, "", "LinuxCNC tool table for G43"),
-      choice("tool-table-units", G::Simulation, {"mm", "in", "inch"}, "mm",
-             "units of the tool table's lengths: mm or in"),
+      choice("tool-table-units", G::Simulation, {"mm", "in", "inch"}, "",
+             "units of a LinuxCNC tool table's numbers: mm or in (default: the program's, its "
+             "first G20/G21, else the start-up units)"),
       choice("startup-units", G::Simulation, {"mm", "in", "inch"}, "",
              "the machine's units at start-up, for a program that sets neither G20 nor G21 "
              "(default: the machine file's startup_units, else mm)"),

@@ -230,3 +230,29 @@ TEST_CASE("G41 takes its radius from a tool library of any format", "[run][tools
     }
   CHECK(found);
 }
+
+TEST_CASE("a LinuxCNC tool table is read in the program's units", "[run]") {
+  // The program's first G20 or G21 outside comments: a "(G21 ...)" comment and a "; G21"
+  // remark do not count. A 0.25 in flat read in inches is 6.35 mm across; read in mm, 0.25 mm.
+  test::TempFolder dir("job_table_units");
+  const std::string table = dir.write("tools.tbl", "T1 P1 D0.25 ;flat\n");
+  const std::string program =
+      dir.write("p.ngc",
+                "(G21 would be metric) ; G21\nG20 G90\nT1 M6\nG0 X0 Y0 Z0.1\nG1 Z-0.05 F10\n"
+                "G1 X1\nM2\n");
+  OptionValues v = {{"program", program}, {"tools", table}, {"stock", "box:-1,-1,-1,2,1,0"}};
+  CHECK(makeJob(JobCommand::Simulate, v).cutters.byTool.at(1).radius() ==
+        Approx(3.175).margin(1e-12));
+  v["tool-table-units"] = "mm";
+  CHECK(makeJob(JobCommand::Simulate, v).cutters.byTool.at(1).radius() ==
+        Approx(0.125).margin(1e-12));
+  // Neither G20 nor G21: the start-up units.
+  const std::string bare =
+      dir.write("bare.ngc", "G90\nT1 M6\nG0 X0 Y0 Z0.1\nG1 Z-0.05 F10\nG1 X1\nM2\n");
+  OptionValues b = {{"program", bare},
+                    {"tools", table},
+                    {"stock", "box:-1,-1,-1,2,1,0"},
+                    {"startup-units", "in"}};
+  CHECK(makeJob(JobCommand::Simulate, b).cutters.byTool.at(1).radius() ==
+        Approx(3.175).margin(1e-12));
+}
