@@ -88,6 +88,7 @@ Toolpath Interpreter::run(std::unique_ptr<SourceFile> main) {
   files_.push_back(std::move(main));
   out_.files.push_back(files_[0]->name);
   execute();
+  if (corner_) failCorner("the end of the program");
   comp_.flush();  // what compensation held back (the program ended with it on)
   out_.inch = inch_;
   if (options_.machine) toWorkFrame(*options_.machine);
@@ -317,6 +318,7 @@ void Interpreter::assign(const gcode::Assignment& a) {
 
 Interpreter::Words Interpreter::collect(const Block& b) {
   Words w;
+  w.corner = b.corner;
   std::map<int, std::pair<int, int>> gGroups;  // group -> (code, column)
   std::map<int, std::pair<int, int>> mGroups;
   for (const gcode::Word& word : b.words) {

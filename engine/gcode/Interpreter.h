@@ -155,8 +155,9 @@ class Interpreter final : public gcode::ParameterSource {
   struct Words {
     std::array<std::optional<double>, 28> v;
     std::array<int, 28> col{};
-    std::vector<std::pair<int, int>> g;  ///< (code x10, column)
-    bool otherAxes = false;              ///< A, B, C, U, V or W words on the line
+    std::vector<std::pair<int, int>> g;       ///< (code x10, column)
+    bool otherAxes = false;                   ///< A, B, C, U, V or W words on the line
+    std::optional<gcode::CornerWord> corner;  ///< ",R" or ",C" on the line
     std::vector<std::pair<int, int>> m;
     bool has(char c) const { return v[slot(c)].has_value(); }
     double get(char c) const { return *v[slot(c)]; }
@@ -315,7 +316,18 @@ class Interpreter final : public gcode::ParameterSource {
   const ReaderOptions& options_;
   mutable Toolpath out_;
   mutable std::optional<Vector3d> physicalStart_;  ///< see comp_
-  const Block* currentBlock_ = nullptr;            ///< the line being executed
+  /// A G1 with a corner word, waiting for the next move: its index in out_.moves and where
+  /// the word is (for messages).
+  struct PendingCorner {
+    std::size_t move = 0;
+    gcode::CornerWord word;
+    int file = 0, line = 0;
+  };
+  std::optional<PendingCorner> corner_;
+  /// Round or chamfer the corner between the pending corner's move and the move after it.
+  void applyCorner();
+  [[noreturn]] void failCorner(const std::string& found) const;
+  const Block* currentBlock_ = nullptr;  ///< the line being executed
   mutable bool blockRecorded_ = false;
   std::vector<std::unique_ptr<SourceFile>> files_;
   int file_ = 0;

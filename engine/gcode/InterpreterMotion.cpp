@@ -77,8 +77,64 @@ void Interpreter::emitLinear(MoveKind kind, const Vector3d& end, double feed) {
   out_.moves.push_back(std::move(m));
 }
 
+void Interpreter::failCorner(const std::string& found) const {
+  const PendingCorner& c = *corner_;
+  throw GcodeError(files_[static_cast<std::size_t>(c.file)]->name, c.line, c.word.column,
+                   std::string("expected a G1 in the XY plane (G17) after the corner ,") +
+                       c.word.kind +
+                       " (Fanuc and Haas round or chamfer the corner between two "
+                       "such moves), found " +
+                       found);
+}
+
+void Interpreter::applyCorner() {
+  const PendingCorner c = *corner_;
+  corner_.reset();
+  Move& a = out_.moves[c.move];
+  Move& b = out_.moves[c.move + 1];
+  auto flat = [](const Move& m) { return std::abs(m.end.z() - m.start.z()) <= 1e-9; };
+  if (b.kind != MoveKind::Line || !flat(a) || !flat(b) || plane_ != Plane::XY)
+    failCorner(b.kind != MoveKind::Line ? "another move" : "a move that changes Z");
+  const Vector3d d1 = (a.end - a.start).normalized(), d2 = (b.end - b.start).normalized();
+  const double cross = d1.x() * d2.y() - d1.y() * d2.x();
+  const double turn = std::atan2(std::abs(cross), d1.dot(d2));  // 0: straight on
+  if (!(turn > 1e-9) || !(turn < kPi - 1e-9)) failCorner("no corner (the moves are in line)");
+  const double v = c.word.value * (inch_ ? kInch : 1.0);
+  // From the corner back along the first move and on along the second: a fillet's tangent
+  // points R tan(turn / 2) away; a chamfer's C.
+  const double t = c.word.kind == 'R' ? v * std::tan(0.5 * turn) : v;
+  const double la = (a.end - a.start).norm(), lb = (b.end - b.start).norm();
+  if (t > la + 1e-9 || t > lb + 1e-9)
+    throw GcodeError(files_[static_cast<std::size_t>(c.file)]->name, c.line, c.word.column,
+                     std::string("expected a corner ,") + c.word.kind +
+                         " that fits both moves (it takes " + length(t / unit()) +
+                         " of each), found moves of " + length(la / unit()) + " and " +
+                         length(lb / unit()));
+  const Vector3d corner = a.end, from = corner - t * d1, to = corner + t * d2;
+  Move piece = a;
+  piece.start = from;
+  piece.end = to;
+  if (c.word.kind == 'R') {
+    const Vector3d left(-d1.y(), d1.x(), 0.0);  // a left turn's centre is to the left
+    piece.kind = MoveKind::Arc;
+    piece.turns = cross > 0.0 ? 1 : -1;
+    piece.center = from + (cross > 0.0 ? 1.0 : -1.0) * v * left;
+  }
+  a.end = from;
+  b.start = to;
+  out_.moves.insert(out_.moves.begin() + static_cast<long>(c.move) + 1, std::move(piece));
+}
+
 void Interpreter::motion(const Words& w, bool explicitMotion, bool machineCoords) {
   const int column = explicitMotion ? w.gColumn(motion_) : 1;
+  const bool plainLine = motion_ == G_1 && !comp_.offsetting();
+  if (corner_ && !plainLine)
+    failCorner(comp_.offsetting() ? "a move under cutter radius compensation"
+                                  : codeName('G', motion_));
+  if (w.corner && !plainLine)
+    fail(w.corner->column, std::string("expected a corner ,") + w.corner->kind +
+                               " on a G1 without cutter radius compensation, found it with " +
+                               codeName('G', motion_));
   if (comp_.on() && motion_ != G_0 && motion_ != G_1 && motion_ != G_2 && motion_ != G_3)
     fail(column, "expected G0, G1, G2 or G3 with cutter radius compensation on, found " +
                      codeName('G', motion_));
@@ -100,6 +156,8 @@ void Interpreter::motion(const Words& w, bool explicitMotion, bool machineCoords
         return;
       }
       emitLinear(MoveKind::Line, end, feed);
+      if (corner_) applyCorner();
+      if (w.corner) corner_ = PendingCorner{out_.moves.size() - 1, *w.corner, file_, line_ + 1};
       return;
     }
     case G_2:

@@ -365,10 +365,11 @@ std::size_t wordsStart(const std::string& s) {
   return p;
 }
 
-/// A program number alone at p of a compacted line: an 'o' and only digits to its end
-/// (Fanuc and Haas posts write "O1001 (PART)"; M98 calls such a line's number).
+/// A program number alone at p of a compacted line: an 'o' (or ':', as Fanuc and Haas take
+/// it in ISO code) and only digits to its end (Fanuc and Haas posts write "O1001 (PART)";
+/// M98 calls such a line's number).
 bool isProgramNumber(const std::string& s, std::size_t p) {
-  if (p + 1 >= s.size() || s[p] != 'o') return false;
+  if (p + 1 >= s.size() || (s[p] != 'o' && s[p] != ':')) return false;
   for (std::size_t i = p + 1; i < s.size(); ++i)
     if (!std::isdigit(static_cast<unsigned char>(s[i]))) return false;
   return true;
@@ -392,6 +393,7 @@ Block parseLine(std::string_view line, const ParameterSource& params) {
   }
   skipLineNumber(s, p);
   in.setPos(p);
+  if (p < s.size() && s[p] == ':' && isProgramNumber(s, p)) return block;  // ":1001"
 
   if (in.peek() == 'o') {
     OWord& o = block.oword;
@@ -446,6 +448,23 @@ Block parseLine(std::string_view line, const ParameterSource& params) {
         in.failAt(valueAt, "expected a finite value, found " +
                                std::string(std::isnan(a.value) ? "nan" : "an infinite one"));
       block.assignments.push_back(std::move(a));
+      continue;
+    }
+    if (letter == ',') {  // a corner word: ",r15" or ",c8"
+      in.setPos(in.pos() + 1);
+      const char kind = in.peek();
+      if (kind != 'r' && kind != 'c') in.fail("R or C after ',' (a corner word: ,R15 or ,C8)");
+      if (block.corner) in.fail("one corner word on a line");
+      in.setPos(in.pos() + 1);
+      const std::size_t valueAt = in.pos();
+      CornerWord c;
+      c.kind = kind == 'r' ? 'R' : 'C';
+      c.column = column;
+      c.value = in.real();
+      if (!std::isfinite(c.value) || !(c.value > 0.0))
+        in.failAt(valueAt, std::string("expected a positive corner ,") + c.kind + ", found " +
+                               formatNumber(c.value));
+      block.corner = c;
       continue;
     }
     const bool polar = letter == '@' || letter == '^';

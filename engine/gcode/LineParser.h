@@ -10,6 +10,7 @@
 /// functions ABS ACOS ASIN ATAN[a]/[b] COS EXP FIX FUP ROUND LN SIN SQRT TAN EXISTS (angles in
 /// degrees); parameters #n, #[expr], #<name>; assignments #n=value, #<name>=value; O-words.
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -53,10 +54,19 @@ struct OWord {
 };
 
 /// One parsed line.
+/// A Fanuc/Haas corner word after a G1 (", R 15": round the corner to the next move with
+/// radius 15; ", C 8": chamfer it 8 from the corner along each move).
+struct CornerWord {
+  char kind = 'R';  ///< 'R' or 'C'
+  double value = 0.0;
+  int column = 0;
+};
+
 struct Block {
   bool blockDelete = false;  ///< the line starts with '/'
   bool percent = false;      ///< the line is a '%' program delimiter
   std::vector<Word> words;
+  std::optional<CornerWord> corner;
   std::vector<Assignment> assignments;
   bool hasOWord = false;
   OWord oword;

@@ -514,6 +514,13 @@ TEST_CASE("M98/M99 subprograms, Fanuc's repeat digits and grbl's off-plane word"
     checkPoint(m[3].end, 30, 0, 5);
     CHECK(m[3].line == 7);  // the subprogram's line
     checkPoint(m[4].end, 50, 0, 5);
+    // Fanuc and Haas also number programs with ':' (ISO code): ":1000" names the main
+    // program, ":2000" the subprogram M98 calls; the same moves.
+    const auto c = moves(":1000 (PART)\nG21 G90\nG0 X0 Y0 Z5\nM98 P2000 L3\nG0 X50\nM99\n:2000\n" +
+                         sub.substr(sub.find('\n') + 1));
+    REQUIRE(c.size() == 5);
+    checkPoint(c[3].end, 30, 0, 5);
+    checkPoint(c[4].end, 50, 0, 5);
   }
   {
     // P32000: O2000 three times with --dialect fanuc (the digits above four are the count);
@@ -701,4 +708,41 @@ TEST_CASE("a program that sets neither G20 nor G21 is read in the machine's star
   const Toolpath set = run("G21\n" + text, o);
   CHECK(set.unitsSet);
   CHECK(set.moves.back().end.isApprox(Eigen::Vector3d(2, 0, -0.05)));
+}
+
+TEST_CASE("Fanuc and Haas corner words round or chamfer the corner to the next G1", "[gcode]") {
+  // A 90 deg left turn at (20, 0): ",R5" puts the tangent points R tan(45 deg) = 5 mm from the
+  // corner on each move, the arc's centre at (15, 5), counter-clockwise; ",C4" cuts 4 mm from
+  // the corner along each (Fanuc operator's manual, chamfering and corner R).
+  const auto r = moves("G21 G90 G17\nG0 X0 Y0 Z-1\nG1 X20 ,R5 F100\nG1 Y20\nM2\n");
+  REQUIRE(r.size() == 4);
+  checkPoint(r[1].end, 15, 0, -1);
+  CHECK(r[2].kind == MoveKind::Arc);
+  checkPoint(r[2].start, 15, 0, -1);
+  checkPoint(r[2].end, 20, 5, -1);
+  checkPoint(r[2].center, 15, 5, -1);
+  CHECK(r[2].turns == 1);
+  CHECK(r[2].line == 3);
+  checkPoint(r[3].start, 20, 5, -1);
+  checkPoint(r[3].end, 20, 20, -1);
+  // A right turn: clockwise, the centre to the right; in inches, ",R0.2" is 5.08 mm.
+  const auto in = moves("G20 G90 G17\nG0 X0 Y0 Z0\nG1 X1 ,R0.2 F10\nG1 Y-1\nM2\n");
+  REQUIRE(in.size() == 4);
+  CHECK(in[2].turns == -1);
+  checkPoint(in[2].center, 25.4 - 5.08, -5.08, 0);
+  const auto c = moves("G21 G90 G17\nG0 X0 Y0 Z-1\nG1 X20 , C 4 F100\nG1 Y20\nM2\n");
+  REQUIRE(c.size() == 4);
+  CHECK(c[2].kind == MoveKind::Line);
+  checkPoint(c[2].start, 16, 0, -1);
+  checkPoint(c[2].end, 20, 4, -1);
+  // What cannot be done is refused at the corner word.
+  CHECK_THAT(errorOf("G21 G90\nG0 X0 Y0\nG1 X20 ,R30 F100\nG1 Y20\n"),
+             Contains("test.ngc:3:8: expected a corner ,R that fits both moves (it takes 30 mm "
+                      "of each), found moves of 20 mm and 20 mm"));
+  CHECK_THAT(errorOf("G21 G90\nG0 X0 Y0\nG1 X20 ,R5 F100\nG0 Y20\n"),
+             Contains("test.ngc:3:8: expected a G1 in the XY plane (G17) after the corner ,R") &&
+                 Contains("found G0"));
+  CHECK_THAT(errorOf("G21 G90\nG0 X0 Y0\nG1 X20 ,R5 F100\nM2\n"),
+             Contains("found the end of the program"));
+  CHECK_THAT(errorOf("G21 G90\nG1 X20 ,X5 F100\n"), Contains("expected R or C after ','"));
 }
