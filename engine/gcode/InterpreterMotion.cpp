@@ -407,6 +407,9 @@ void Interpreter::compensation(int code, const Words& w) {
     const auto it = toolDiameters_.find(tool);
     diameter = it == toolDiameters_.end() ? 0.0 : it->second;
   }
+  // Fanuc and Haas take G41 (G42) restated while it is on, with the same offset, as a no-op
+  // (posts write it on every contour line); LinuxCNC refuses it.
+  if (options_.dialect == Dialect::Fanuc && comp_.onAs(side, diameter / 2.0)) return;
   try {
     comp_.on(side, diameter / 2.0, physicalStart_ ? *physicalStart_ : pos_, unit(), plane_);
   } catch (const CompensationError& e) {

@@ -746,3 +746,28 @@ TEST_CASE("Fanuc and Haas corner words round or chamfer the corner to the next G
              Contains("found the end of the program"));
   CHECK_THAT(errorOf("G21 G90\nG1 X20 ,X5 F100\n"), Contains("expected R or C after ','"));
 }
+
+TEST_CASE("a G41 restated while it is on: a no-op for Fanuc and Haas, refused by LinuxCNC",
+          "[gcode]") {
+  ReaderOptions o;
+  o.toolDiameters = {{1, 6.0}};
+  const std::string head = "G21 G90 G17\nT1 M6\nG0 X-10 Y-10\nG41 D1 G1 X0 Y0 F100\nG1 X20\n";
+  const std::string tail = "G1 X0\nG40 G1 X-10 Y-10\nM2\n";
+  try {
+    run(head + "G41 Y20\n" + tail, o);
+    FAIL("LinuxCNC's reading took a restated G41");
+  } catch (const GcodeError& e) {
+    CHECK_THAT(e.what(),
+               Contains("test.ngc:6:1: cannot turn cutter radius compensation on when it is on"));
+  }
+  o.dialect = Dialect::Fanuc;
+  const auto restated = run(head + "G41 Y20\n" + tail, o).moves;
+  const auto plain = run(head + "G1 Y20\n" + tail, o).moves;
+  REQUIRE(restated.size() == plain.size());
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    checkPoint(restated[i].start, plain[i].start.x(), plain[i].start.y(), plain[i].start.z());
+    checkPoint(restated[i].end, plain[i].end.x(), plain[i].end.y(), plain[i].end.z());
+  }
+  // The offset path: the 20 x 20 square's left side, 3 mm inside it: (3, 17) after X20.
+  checkPoint(plain[3].end, 17, 3, 0);
+}
