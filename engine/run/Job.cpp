@@ -390,6 +390,31 @@ void refuseMissing(JobCommand command, const OptionValues& values, const std::st
 }
 
 /// The job's program read (a CAMotics project's programs one after the other) with the tool
+/// Only a re-fed program is written back, from its words' positions: a run that is not keeps
+/// none (megabytes on a long program).
+void dropWords(Job& job) {
+  if (job.command != JobCommand::Schedule)
+    for (SourceBlock& b : job.path.blocks)
+      std::vector<WordSpan>().swap(b.words);
+}
+
+/// Without a machine the tool is taken to start at the program's origin; where a box or
+/// stock.vdb stock reaches above it (the program's Z0 below the stock's top), it starts at the
+/// stock's top instead, above the origin, as a machine at its Z home is above the part: the
+/// program is read again from there, so that its first rapid does not start in the material.
+void startAboveStock(Job& job, bool project) {
+  if (project || job.reader.machine || job.reader.startKnown || job.path.moves.empty()) return;
+  const std::optional<Box3> b = job.stock.box           ? job.stock.box
+                                : job.stock.vdb.empty() ? std::nullopt
+                                                        : stockFileBounds(job.stock);
+  if (!b || !(b->max.z() > job.reader.start.z() + 1e-9)) return;
+  ReaderOptions ro = job.reader;
+  ro.start.z() = b->max.z();
+  job.path = readProgram(job.program, ro);
+  job.reader = ro;
+  dropWords(job);
+}
+
 /// Whether a program's first G20 or G21 (outside comments) says inches; nullopt when it has
 /// neither or cannot be read (the reader then says why).
 std::optional<bool> firstUnitsWord(const std::string& path) {
@@ -467,11 +492,7 @@ std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& valu
   job.path = project ? readPrograms(project->files, ro) : readProgram(job.program, ro);
   job.reader = ro;
   job.simulation.maxSteps = static_cast<std::size_t>(maxSteps);
-  // Only a re-fed program is written back, from its words' positions: a run that is not
-  // keeps none (megabytes on a long program).
-  if (command != JobCommand::Schedule)
-    for (SourceBlock& b : job.path.blocks)
-      std::vector<WordSpan>().swap(b.words);
+  dropWords(job);
   if (project && project->files.size() > 1 && command == JobCommand::Schedule)
     throw ParameterError(job.program + ": schedule re-feeds one program and this project runs " +
                          std::to_string(project->files.size()) +
@@ -666,6 +687,7 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   if (job.scheduling()) job.schedule = scheduleOptions(values, sys, job);
   so.physics = physicsOptions(values, sys);
   stockOptions(job, values, project, sys);
+  startAboveStock(job, project.has_value());
   // The cell follows the narrowest engagement at the program's depths (Resolution.h).
   const std::string voxel = text("voxel");
   job.voxelGiven = !voxel.empty();

@@ -416,3 +416,22 @@ TEST_CASE("a job's memory estimate follows its stock's closed-form bounds", "[ru
   v["cross-check"] = "true";
   CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) == Approx(64e6 + 100 * 1000.0 + voxels));
 }
+
+TEST_CASE("without a machine the tool starts above a stock that reaches above Z0", "[run]") {
+  // The program's Z0 is the stock's bottom (a 10 mm block from Z0 up): the tool, taken to start
+  // at the program's origin, would start inside it and its first rapid to Z15 would be a
+  // crash. It starts at the stock's top instead: no collision, and the slot (15 x 6 x 2 mm)
+  // with its plunge's disc (pi 3^2 x 2) is all that is removed: 236.55 mm^3 (0.2 %: the
+  // dexels' rim, as the slot test above).
+  test::TempFolder dir("pipeline_start_above");
+  OptionValues v = {
+      {"program",
+       dir.write("p.ngc", "G21 G90\nG0 Z15\nG0 X5 Y5\nG1 Z8 F100\nG1 X20\nG0 Z15\nM2\n")},
+      {"tool", "flat"},
+      {"diameter", "6mm"},
+      {"stock", "box:0,0,0,30,30,10"}};
+  const RunResult r = runJob(makeJob(JobCommand::Simulate, v));
+  CHECK(r.sim.collisions.empty());
+  CHECK(r.sim.removed == Approx(180.0 + 18.0 * kPi).epsilon(0.002));
+  CHECK(r.job.path.moves.front().start.z() == 10.0);
+}
