@@ -93,6 +93,8 @@ void Interpreter::applyCorner() {
   Move& a = out_.moves[c.move];
   Move& b = out_.moves[c.move + 1];
   auto flat = [](const Move& m) { return std::abs(m.end.z() - m.start.z()) <= 1e-9; };
+  if (!out_.toolLoads.empty() && out_.toolLoads.back().firstMove > c.move)
+    failCorner("a tool change");
   if (b.kind != MoveKind::Line || !flat(a) || !flat(b) || plane_ != Plane::XY)
     failCorner(b.kind != MoveKind::Line ? "another move" : "a move that changes Z");
   const Vector3d d1 = (a.end - a.start).normalized(), d2 = (b.end - b.start).normalized();

@@ -744,6 +744,8 @@ TEST_CASE("Fanuc and Haas corner words round or chamfer the corner to the next G
                  Contains("found G0"));
   CHECK_THAT(errorOf("G21 G90\nG0 X0 Y0\nG1 X20 ,R5 F100\nM2\n"),
              Contains("found the end of the program"));
+  CHECK_THAT(errorOf("G21 G90\nG0 X0 Y0\nG1 X20 ,R5 F100\nT2 M6\nG1 Y20\n"),
+             Contains("test.ngc:3:8: expected a G1") && Contains("found a tool change"));
   CHECK_THAT(errorOf("G21 G90\nG1 X20 ,X5 F100\n"), Contains("expected R or C after ','"));
 }
 
