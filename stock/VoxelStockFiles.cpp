@@ -726,6 +726,7 @@ openvdb::GridPtrVec dexelGrids(const DexelStock& d, const openvdb::math::Transfo
 
 /// The rays a dexel run wrote into `path` (dexelGrids), when they are there at spacing h.
 std::optional<DexelStock> exactDexels(const std::string& path, double h) {
+  initVdb();
   openvdb::GridBase::Ptr g[4];
   try {
     openvdb::io::File file(path);
@@ -782,9 +783,8 @@ std::optional<DexelStock> exactDexels(const std::string& path, double h) {
 }  // namespace
 
 DexelStock VoxelStock::dexelsFromVdb(const std::string& path, double h) {
-  const StockFile file = readStockGrid(path);  // (checks the file and its grid "stock")
   if (std::optional<DexelStock> exact = exactDexels(path, h)) return std::move(*exact);
-  const FloatGrid::Ptr grid = resampledFractions(file, h);
+  const FloatGrid::Ptr grid = resampledFractions(readStockGrid(path), h);
   const CoordBBox bb = grid->evalActiveVoxelBoundingBox();
   if (bb.empty()) throw ParameterError("stock '" + path + "' holds no material");
   const int nx = bb.dim().x(), ny = bb.dim().y();

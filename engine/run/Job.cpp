@@ -455,7 +455,7 @@ std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& valu
   job.startupUnitsGiven = !startup.empty() || (ro.machine && ro.machine->startUnitsGiven);
   if (!text("tool-table-units").empty()) {
     ro.toolTableInch = unitSystemNamed(text("tool-table-units")) == UnitSystem::Inch;
-  } else {
+  } else if (!ro.toolTable.empty() || !text("tools").empty()) {  // (a table to read)
     const std::optional<bool> inch =
         firstUnitsWord(isCamoticsProject(job.program) ? std::string() : job.program);
     ro.toolTableInch = inch ? *inch : ro.startInch;

@@ -53,6 +53,17 @@ std::vector<std::size_t> feedRuns(const SimulationResult& sim) {
   return runStart;
 }
 
+/// The longest distance (mm) a change between the feeds' speeds can need: no change between
+/// speeds up to the top one vMax needs more than vMax T(vMax) (mean speed at most vMax, T
+/// growing with the change).
+double longestChange(const SimulationResult& sim, const std::vector<double>& feed, double a,
+                     double j) {
+  double vMax = 0.0;
+  for (std::size_t i = 0; i < sim.steps.size(); ++i)
+    if (isFeedStep(sim.steps[i])) vMax = std::max(vMax, feed[i] / 60.0);
+  return vMax * changeTime(vMax, a, j);
+}
+
 /// The highest speed (mm/s) reachable from v0 within `distance` (mm) under changeDistance.
 double reachable(double v0, double vWanted, double distance, double a, double j) {
   if (changeDistance(v0, vWanted, a, j) <= distance) return vWanted;
@@ -72,12 +83,7 @@ double reachable(double v0, double vWanted, double distance, double a, double j)
 void limitJerk(const SimulationResult& sim, std::vector<double>& feed, double a, double j) {
   if (!(j > 0.0)) return;
   const auto& st = sim.steps;
-  double vMax = 0.0;
-  for (std::size_t i = 0; i < st.size(); ++i)
-    if (isFeedStep(st[i])) vMax = std::max(vMax, feed[i] / 60.0);
-  // No change between feeds up to vMax needs more than vMax T(vMax) (mean speed at most
-  // vMax, T growing with the change).
-  const double window = vMax * changeTime(vMax, a, j);
+  const double window = longestChange(sim, feed, a, j);
   const std::vector<std::size_t> runStart = feedRuns(sim);
   for (std::size_t k = 1; k < st.size(); ++k) {
     if (!isFeedStep(st[k])) continue;
@@ -116,12 +122,7 @@ void brakeAhead(const SimulationResult& sim, std::vector<double>& feed,
                 std::vector<Binding>& why) {
   if (!(a > 0.0) && !(j > 0.0)) return;
   const auto& st = sim.steps;
-  double vMax = 0.0;
-  for (std::size_t i = 0; i < st.size(); ++i)
-    if (isFeedStep(st[i])) vMax = std::max(vMax, feed[i] / 60.0);
-  // No change between speeds up to vMax needs more than vMax T(vMax) (mean speed at most
-  // vMax, T growing with the change): farther pairs need no look.
-  const double window = vMax * changeTime(vMax, a, j);
+  const double window = longestChange(sim, feed, a, j);  // farther pairs need no look
   const std::vector<std::size_t> runStart = feedRuns(sim);
   for (std::size_t k = st.size(); k-- > 0;) {
     if (!isFeedStep(st[k])) continue;
