@@ -161,6 +161,15 @@ Eigen::Vector2d meanDirection(const Eigen::Vector2d& a, const Eigen::Vector2d& b
   return n.norm() > 1e-12 ? Eigen::Vector2d(n.normalized()) : b;
 }
 
+/// A piece of the swept solid along a ray: heights, the share of the column it covers, and the
+/// cutter's outward normal there (the line the rest of a wall's column keeps), where the
+/// outline's radius (1 / kappa) is at least 2 h: a tighter one (a V-bit's tip, a small ball's
+/// bottom) is no line across a column, and has none.
+Interval piece(double a, double b, double cover, const Eigen::Vector2d& n, double kappa, double h) {
+  if (std::abs(kappa) * h > 0.5) return {a, b, cover};
+  return {a, b, cover, static_cast<float>(n.x()), static_cast<float>(n.y())};
+}
+
 /// Lowest height above the tip where the cutter's radius reaches rho, from the profile in
 /// closed form (its widening pieces, lines and the lower corner arc); the cutting height
 /// beyond the widest radius. For cutters that widen upwards.
@@ -330,6 +339,13 @@ void rampBand(const StepPath& path, const AptCutter& cutter, const Eigen::Vector
   const double dz = path.end.z() - path.start.z();
   // The XY distance from q to the slice at height zs, and the direction from its nearest disc;
   // +inf where no instance's side spans zs.
+  // The curvature of the slice's outline at height zs, at most: its discs' radius there,
+  // taken above the step's highest tip (the smallest).
+  const double zHigh = std::max(path.start.z(), path.end.z());
+  auto sliceCurvature = [&](double zs) {
+    const double w = zs > zHigh ? cutter.radiusAt(std::min(zs - zHigh, H)) : 0.0;
+    return w > 0.0 ? 1.0 / w : std::numeric_limits<double>::infinity();
+  };
   auto slice = [&](double zs, Eigen::Vector2d& away) {
     // Tip heights z(t) in [zs - H, zs]: the instances whose side spans zs.
     double t0 = reach.first, t1 = reach.second;
@@ -369,14 +385,14 @@ void rampBand(const StepPath& path, const AptCutter& cutter, const Eigen::Vector
       const double b = zNone + (bandTop - zNone) * (k + 1) / kTallPieces;
       const double dHigh = slice(b, awayHigh);
       double cover = 0.0;
+      Eigen::Vector2d n = meanDirection(awayLow, awayHigh);
       if (std::isfinite(dLow) && std::isfinite(dHigh)) {
-        cover = ColumnShare(meanDirection(awayLow, awayHigh)).averageCover(dLow, dHigh, h);
+        cover = ColumnShare(n).averageCover(dLow, dHigh, h);
       } else {
-        Eigen::Vector2d away;
-        const double d = slice(0.5 * (a + b), away);
-        if (std::isfinite(d)) cover = ColumnShare(away).cover(d, h);
+        const double d = slice(0.5 * (a + b), n);
+        if (std::isfinite(d)) cover = ColumnShare(n).cover(d, h);
       }
-      if (cover > 0.0) solid.push_back({a, b, cover});
+      if (cover > 0.0) solid.push_back(piece(a, b, cover, n, sliceCurvature(0.5 * (a + b)), h));
       dLow = dHigh;
       awayLow = awayHigh;
     }
@@ -402,14 +418,17 @@ void rampBand(const StepPath& path, const AptCutter& cutter, const Eigen::Vector
             s1 <= 0.5 ? meanDirection(away[0], away[1]) : meanDirection(away[2], away[1]);
         const double cover = ColumnShare(n).averageCover(dAt(s0), dAt(s1), h);
         if (cover > 0.0)
-          solid.push_back({zNone + (bandTop - zNone) * s0, zNone + (bandTop - zNone) * s1, cover});
+          solid.push_back(piece(zNone + (bandTop - zNone) * s0, zNone + (bandTop - zNone) * s1,
+                                cover, n,
+                                sliceCurvature(zNone + (bandTop - zNone) * 0.5 * (s0 + s1)), h));
       }
     } else {
       for (int k = 0; k < 2; ++k) {
         Eigen::Vector2d n;
-        const double dm = slice(0.5 * (zs[k] + zs[k + 1]), n);
+        const double dmZ = 0.5 * (zs[k] + zs[k + 1]);
+        const double dm = slice(dmZ, n);
         const double cover = std::isfinite(dm) ? ColumnShare(n).cover(dm, h) : 0.0;
-        if (cover > 0.0) solid.push_back({zs[k], zs[k + 1], cover});
+        if (cover > 0.0) solid.push_back(piece(zs[k], zs[k + 1], cover, n, sliceCurvature(dmZ), h));
       }
     }
   }
@@ -482,7 +501,7 @@ bool steadySolid(const StepPath& path, const AptCutter& cutter, const Eigen::Vec
       const double dHigh = rho - cutter.radiusAt(b - z);
       const double cover =
           share.curvedCover(share.averageCover(dLow, dHigh, h), rho - w, h, outline.at(w));
-      if (cover > 0.0) solid.push_back({a, b, cover});
+      if (cover > 0.0) solid.push_back(piece(a, b, cover, away, outline.at(w), h));
       dLow = dHigh;
     }
   }

@@ -4,12 +4,14 @@
 /// intervals of z where its h x h column holds material, so undercuts and several levels are
 /// kept. Computed in a different way from the voxel stock: exact along the tool axis (each
 /// removal cuts a ray's intervals at the swept solid's surface, to 1e-4 mm), sampled across
-/// it. Each interval carries the share f of its column's cross-section still material, which
-/// is where sub-ray accuracy pays: where the cutter's outline crosses a column, the column
-/// keeps min(f, 1 - c), c the share the cutter covers (from the signed distance of the ray to
-/// the outline, clamp(1/2 - d/h, 0, 1)); a plain heightfield removes all or nothing and errs
-/// by 6-17 % per step on a slot (shared/BUILD-NOTES.md). Columns at the stock's edges weigh
-/// by the share of their area inside it.
+/// it. Each interval carries the share f of its column's cross-section still material, and the
+/// line across the column that bounds it, which is where sub-ray accuracy pays (a plain
+/// heightfield removes all or nothing and errs by 6-17 % per step on a slot): where the
+/// cutter's outline crosses a column it covers the share c of the column on the inner side of
+/// the outline (the square's area, from the ray's distance and direction to the outline and its
+/// curvature), and the column keeps what lies inside its own line and outside the cutter's
+/// (min(f, 1 - c) where the two lines run within 15 deg of each other: one curve cut again).
+/// A box stock's last row and column hold their share of the box, bounded by its face.
 ///
 /// A step's swept solid meets a ray in an interval. For cutters whose radius never shrinks
 /// upwards: steps that keep their height (lines and arcs in XY) and vertical ones (plunges,
@@ -43,10 +45,10 @@ class DexelStock : public Stock {
   /// A box of material (mm). Throws ParameterError for an empty box, a non-positive spacing
   /// or a ray count that would not fit in this machine's memory.
   static DexelStock box(const Box3& box, double spacing);
-  /// Bytes a ray holds before it is cut: a vector (24), a weight (8) and one interval (24,
-  /// 32 with the allocator's header): 64; measured 67.5 (a 97 x 60 mm box at 0.01 mm, 58
-  /// million rays, 3.9 GB resident).
-  static constexpr double kBytesPerRay = 64.0;
+  /// Bytes a ray holds before it is cut: a vector (24), a weight (8) and one interval (32,
+  /// 48 with the allocator's header): 80; measured 84.5 (a 97 x 60 mm box at 0.015 mm, 25.9
+  /// million rays, 2.13 GB resident).
+  static constexpr double kBytesPerRay = 80.0;
   /// Bytes of a box stock's rays, uncut (cuts add intervals and the removal log): what box()
   /// checks, and a lower bound a batch reserves for the job (engine/run/Batch.h).
   static double memoryBound(const Box3& box, double spacing);
@@ -76,10 +78,15 @@ class DexelStock : public Stock {
   int raysY() const { return ny_; }
   double originX() const { return x0_; }
   double originY() const { return y0_; }
-  /// A material interval of a ray: heights (mm) and the share of the column still material.
+  /// A material interval of a ray: heights (mm), the share of the column still material, and
+  /// the line that bounds it across the column: its outward normal (towards the air; zero where
+  /// it is not known: a whole column, or one read from a mesh), the line leaving share f of the
+  /// column on its inner side. In a piece of a step's swept solid (DexelSolid.h): the share the
+  /// cutter covers and the cutter's outward normal.
   struct Interval {
     double z0, z1;
     double f;
+    float mx = 0.0f, my = 0.0f;
   };
   /// The material intervals of ray (i, j), bottom up; and its column's share of the stock.
   const std::vector<Interval>& ray(int i, int j) const { return rays_[index(i, j)]; }

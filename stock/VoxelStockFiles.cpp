@@ -705,6 +705,11 @@ openvdb::GridPtrVec dexelGrids(const DexelStock& d, const openvdb::math::Transfo
   auto z1 = g[1]->getAccessor();
   auto f = g[2]->getAccessor();
   auto w = g[3]->getAccessor();
+  // The partial intervals' lines (DexelStock::Interval), where they have one.
+  openvdb::Vec3SGrid::Ptr lines = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+  lines->setTransform(xf.copy());
+  lines->setName("dexel_line");
+  auto line = lines->getAccessor();
   for (int j = 0; j < d.raysY(); ++j)
     for (int i = 0; i < d.raysX(); ++i) {
       const auto& ray = d.ray(i, j);
@@ -713,6 +718,8 @@ openvdb::GridPtrVec dexelGrids(const DexelStock& d, const openvdb::math::Transfo
         z0.setValue(c, ray[n].z0);
         z1.setValue(c, ray[n].z1);
         f.setValue(c, ray[n].f);
+        if (ray[n].mx != 0.0f || ray[n].my != 0.0f)
+          line.setValue(c, openvdb::Vec3s(ray[n].mx, ray[n].my, 0.0f));
       }
       if (d.weight(i, j) != 1.0) w.setValue(Coord(i, j, 0), d.weight(i, j));
     }
@@ -721,13 +728,14 @@ openvdb::GridPtrVec dexelGrids(const DexelStock& d, const openvdb::math::Transfo
   g[0]->insertMeta("dexel_spacing", openvdb::DoubleMetadata(d.resolution()));
   g[0]->insertMeta("dexel_nx", openvdb::Int32Metadata(d.raysX()));
   g[0]->insertMeta("dexel_ny", openvdb::Int32Metadata(d.raysY()));
-  return {g[0], g[1], g[2], g[3]};
+  return {g[0], g[1], g[2], g[3], lines};
 }
 
 /// The rays a dexel run wrote into `path` (dexelGrids), when they are there at spacing h.
 std::optional<DexelStock> exactDexels(const std::string& path, double h) {
   initVdb();
   openvdb::GridBase::Ptr g[4];
+  openvdb::Vec3SGrid::Ptr lines;  // (files written before the lines: none)
   try {
     openvdb::io::File file(path);
     file.open(false);
@@ -736,6 +744,8 @@ std::optional<DexelStock> exactDexels(const std::string& path, double h) {
       if (!file.hasGrid(names[k])) return std::nullopt;
       g[k] = file.readGrid(names[k]);
     }
+    if (file.hasGrid("dexel_line"))
+      lines = openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid("dexel_line"));
     file.close();
   } catch (const openvdb::Exception&) {
     return std::nullopt;
@@ -766,6 +776,17 @@ std::optional<DexelStock> exactDexels(const std::string& path, double h) {
     if (ray.size() <= static_cast<std::size_t>(c.z())) ray.resize(c.z() + 1);
     ray[static_cast<std::size_t>(c.z())] = {*it, z1.getValue(c), f.getValue(c)};
   }
+  if (lines)
+    for (auto it = lines->cbeginValueOn(); it; ++it) {
+      const Coord c = it.getCoord();
+      if (c.x() < 0 || c.y() < 0 || c.z() < 0 || c.x() >= nx->value() || c.y() >= ny->value())
+        return std::nullopt;
+      auto& ray = rays[static_cast<std::size_t>(c.y()) * static_cast<std::size_t>(nx->value()) +
+                       static_cast<std::size_t>(c.x())];
+      if (static_cast<std::size_t>(c.z()) >= ray.size()) return std::nullopt;
+      ray[static_cast<std::size_t>(c.z())].mx = (*it).x();
+      ray[static_cast<std::size_t>(c.z())].my = (*it).y();
+    }
   for (auto it = d[3]->cbeginValueOn(); it; ++it) {
     const Coord c = it.getCoord();
     if (c.x() < 0 || c.y() < 0 || c.x() >= nx->value() || c.y() >= ny->value()) return std::nullopt;

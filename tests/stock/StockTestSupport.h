@@ -157,4 +157,17 @@ inline double meanRelative(const std::vector<double>& got, double expected, std:
   return sum / static_cast<double>(got.size() - skip) / expected - 1.0;
 }
 
+/// The steps' standard deviation about their own mean, relative to the mean (issue 44's
+/// per-step steadiness).
+inline double spreadRelative(const std::vector<double>& got, std::size_t skip = 1) {
+  double sum = 0.0, squares = 0.0;
+  const double n = static_cast<double>(got.size() - skip);
+  for (std::size_t i = skip; i < got.size(); ++i)
+    sum += got[i];
+  const double mean = sum / n;
+  for (std::size_t i = skip; i < got.size(); ++i)
+    squares += (got[i] - mean) * (got[i] - mean);
+  return std::sqrt(squares / n) / mean;
+}
+
 }  // namespace engage::test
