@@ -515,8 +515,33 @@ bool steadySolid(const StepPath& path, const AptCutter& cutter, const Eigen::Vec
 /// it: a retract after a ramp had taken up to 0.0012 mm^3 from nothing, the corners the ramp
 /// left (tests/stock/ReferenceCuts.cpp). (Not the union with the two ends everywhere: their
 /// approximate shares would be taken above the band's.)
+/// A column beyond a straight step's lower end (its XY projection on the step there or past
+/// it) meets that end's copy of the cutter alone: along the step every copy is both further
+/// away and higher, so at each height the nearest disc is the lower end's. Its band is then
+/// the one steadySolid gives that copy, as the step before left it (a plunge, a level pass,
+/// the ramp's own step before): rampBand's own pieces of the same surface had differed from
+/// those by a little, and what they covered beyond it was taken (a ball ramping up out of its
+/// plunge took 3 % too much at D/20, 1.4 % at D/40).
 void rampSolid(const StepPath& path, const AptCutter& cutter, const Eigen::Vector2d& q, double h,
                double rayTop, std::vector<Interval>& solid) {
+  if (path.kind == StepPath::Kind::Line) {
+    const Eigen::Vector2d a = path.start.head<2>(), v = path.end.head<2>() - a;
+    const double vv = v.squaredNorm();
+    const bool startLower = path.start.z() <= path.end.z();
+    const double u = vv > 1e-18 ? v.dot(q - a) / vv : 0.5;
+    if (vv > 1e-18 && (startLower ? u <= 0.0 : u >= 1.0)) {
+      StepPath still;
+      still.start = still.end = startLower ? path.start : path.end;
+      if (!steadySolid(still, cutter, q, h, rayTop, solid)) return;
+      // The higher copies' flutes reach higher: full cover up to the highest one's top where
+      // the lower copy covers the column whole at its top.
+      const double lowTop = still.start.z() + cutter.height();
+      const double highTop = std::max(path.start.z(), path.end.z()) + cutter.height();
+      if (!solid.empty() && solid.back().z1 >= lowTop && solid.back().f >= 1.0 && highTop > lowTop)
+        solid.push_back({lowTop, highTop, 1.0});
+      return;
+    }
+  }
   const std::size_t before = solid.size();
   rampBand(path, cutter, q, h, rayTop, solid);
   if (solid.size() > before) return;
