@@ -296,8 +296,7 @@ TEST_CASE("analytic steps without a stock: the side from the stock's side of the
   CHECK_THROWS_AS(analyticSteps(path, cutter, o), ParameterError);
 }
 
-TEST_CASE("a retract from where the last step left its cutter removes nothing, others measure",
-          "[sim]") {
+TEST_CASE("a vertical move where its cutter has been removes nothing, others measure", "[sim]") {
   // A ball end mill (D 6) ramps 0.042 mm down over 12 mm from 0.9 mm below the top face and
   // retracts straight up: the ramp's last step swept the cutter's body where the retract
   // starts, and above that body (at Z 12.058 + flutes) there is no stock, so the retract can
@@ -307,6 +306,7 @@ TEST_CASE("a retract from where the last step left its cutter removes nothing, o
   // flat D 6 body from Z 0 up in a block whose top is Z 5, pi 9 x 5 = 141.37 mm^3; the flat
   // D 10 after the D 6 plunged 5 mm, the ring between them, pi (25 - 9) 5 = 251.33 mm^3
   // (within 1 %: the ring's walls are cells of 0.3 mm against radii of 3 and 5 mm).
+  // engine/sim/Simulation.cpp, VisitedColumns.
   CutterSet tools;
   tools.byTool.emplace(1, AptCutter::ball(6.0, 18.0));
   tools.byTool.emplace(2, AptCutter::flat(10.0, 18.0));
@@ -335,6 +335,23 @@ TEST_CASE("a retract from where the last step left its cutter removes nothing, o
         tools, *s1, SimulationOptions{});
     CHECK(removedAt(ramp, 5) > 10.0);  // the ramp cuts (15.65 mm^3 in the exact reference)
     CHECK(removedAt(ramp, 6) == 0.0);
+
+    // Back down where it plunged before, after a pass that left there (as a raster's second
+    // pass starts where its first did): to the same depth and above it, nothing (measured,
+    // a plunge back took 0.011 mm^3 in dexels); 0.1 mm deeper it is measured: at most the
+    // 0.1 mm by the ball's 25.1 mm^2 below the top face (pi (9 - 1)), less what the ramp's
+    // steeper front took below it (1.47 mm^3 in both models).
+    auto s4 = stockOf(block);
+    const SimulationResult back =
+        simulate(readProgramText("G21 G90 G17\nT1 M6\nG0 X10 Y10 Z12\nG1 Z8 F200\nG1 X20 Y14 Z8.5\n"
+                                 "G1 X25 Y10 Z8.2\nG0 Z12\nG0 X10 Y10\nG1 Z8\nG0 Z12\nG1 Z8.4\n"
+                                 "G1 Z7.9\nG0 Z12\nM2\n",
+                                 "back.ngc"),
+                 tools, *s4, SimulationOptions{});
+    CHECK(removedAt(back, 9) == 0.0);
+    CHECK(removedAt(back, 11) == 0.0);
+    CHECK(removedAt(back, 12) > 1.0);
+    CHECK(removedAt(back, 12) < 0.1 * kPi * 8.0);
 
     Box3 low;
     low.min = {-20, -20, -10};
