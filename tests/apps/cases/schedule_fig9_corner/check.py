@@ -63,14 +63,15 @@ with open(os.path.join(out, "steps.csv")) as f:
 steady = [s for s in steps if s["line"] == "15" and -17.0 < float(s["x_mm"]) < -8.0]
 if len(steady) < 10:
     failures.append(f"only {len(steady)} steady steps on line 15")
-# The dexel stock's steps alternate about the closed form on this side cut (+-0.7 %: rays
-# entering and leaving the band's edge); their mean within 0.1 %, each within 1 %.
+# The dexel stock's steps on this side cut: measured within 0.014 % of the closed form (they
+# alternated by +-0.7 % before the columns kept their lines); their mean within 0.1 %, each
+# within 0.1 %.
 mean = sum(float(s["mrr_mm3_min"]) for s in steady) / max(1, len(steady))
 if abs(mean / 3600.0 - 1.0) > 1e-3:
     failures.append(f"mean steady MRR {mean}, closed form 3600")
 for s in steady:
     mrr = float(s["mrr_mm3_min"])
-    if abs(mrr / 3600.0 - 1.0) > 1e-2:
+    if abs(mrr / 3600.0 - 1.0) > 1e-3:
         failures.append(f"step {s['step']}: MRR {mrr}, closed form 3600")
     scheduled = float(s["mrr_scheduled_mm3_min"])
     if not 3600.0 / 1.05 * (1 - 1e-9) <= scheduled <= 3600.0 * 1.025 * (1 + 1e-9):
