@@ -163,23 +163,20 @@ DexelStock::Interval rest(const DexelStock::Interval& x, const DexelStock::Inter
   return r;
 }
 
-/// What piece `sx` takes from the ray's material in [sx.z0, sx.z1], leaving each interval there
-/// its rest(); returns the material removed, mm (length x share).
-double cut(Intervals& iv, const DexelStock::Interval& sx) {
+/// What piece `sx` takes from the ray's material in [sx.z0, sx.z1], leaving each interval
+/// there its rest() (`rests`, one per interval of `iv`, computed once by the caller); returns
+/// the material removed, mm (length x share).
+double cut(Intervals& iv, const DexelStock::Interval& sx, const Intervals& rests) {
   const double a = sx.z0, b = sx.z1;
   if (!(b > a)) return 0.0;
-  // Most calls change nothing (air, or material already cut as far): no copy then.
-  if (std::none_of(iv.begin(), iv.end(), [&](const Interval& x) {
-        return x.z1 > a && x.z0 < b && rest(x, sx).f < x.f - kSameShare;
-      }))
-    return 0.0;
   double removed = 0.0;
   // Scratch buffers reused from call to call (a removal calls this for every band piece of
   // every ray it reaches): no allocation once they have grown.
   static thread_local Intervals out, merged;
   out.clear();
-  for (const Interval& x : iv) {
-    const Interval r = x.z1 <= a || x.z0 >= b ? x : rest(x, sx);
+  for (std::size_t k = 0; k < iv.size(); ++k) {
+    const Interval& x = iv[k];
+    const Interval& r = rests[k];
     if (r.f >= x.f - kSameShare) {
       out.push_back(x);
       continue;
@@ -800,18 +797,26 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
     }
     double removed = 0.0;
     bool logged = false;
-    LostColumn* column = nullptr;  // this ray's losses, found or started on its first loss
+    LostColumn* column = nullptr;         // this ray's losses, found or started on its first loss
+    static thread_local Intervals rests;  // (scratch: what each interval keeps of one piece)
     for (const Interval& sx : solid) {
-      // What of the ray in [z0, z1] loses material; remember where, for the axial depth.
+      // What each interval keeps (once: the capture and the cut take the same), what of the
+      // ray in [z0, z1] loses material; remember where, for the axial depth. Most pieces change
+      // nothing (air, or material already cut as far): no cut, no copy then.
+      rests.resize(ray.size());
       bool loses = false;
-      for (const Interval& x : ray)
-        if (x.z1 > sx.z0 && x.z0 < sx.z1 && rest(x, sx).f < x.f - kSameShare) {
+      for (std::size_t k = 0; k < ray.size(); ++k) {
+        const Interval& x = ray[k];
+        rests[k] = x.z1 > sx.z0 && x.z0 < sx.z1 ? rest(x, sx) : x;
+        if (rests[k].f < x.f - kSameShare) {
           tile.cuts.push_back({std::max(x.z0, sx.z0), std::min(x.z1, sx.z1)});
           loses = true;
         }
+      }
+      if (!loses) continue;
       // The ray as it was before this step's first change, for readers of the material after
       // an earlier step of the batch.
-      if (loses && !logged) {
+      if (!logged) {
         tile.before.push_back({index(i, j), s, tile.beforeIntervals.size(), ray.size()});
         tile.beforeIntervals.insert(tile.beforeIntervals.end(), ray.begin(), ray.end());
         logged = true;
@@ -822,8 +827,9 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
       // rounding). A log at a span's mean share would put a wall column's rest and the
       // material below it at one share, more than a voxel's material in some voxels.
       if (capture_) {
-        for (const Interval& x : ray) {
-          const double kept = x.z1 > sx.z0 && x.z0 < sx.z1 ? rest(x, sx).f : x.f;
+        for (std::size_t n = 0; n < ray.size(); ++n) {
+          const Interval& x = ray[n];
+          const double kept = rests[n].f;
           if (kept < x.f - kSameShare) {
             if (!column) {
               // Found in lost_, or among those this tile started in this batch, or started.
@@ -848,7 +854,7 @@ std::vector<Removal> DexelStock::removeSteps(const std::vector<StepCut>& steps) 
           }
         }
       }
-      removed += cut(ray, sx);
+      removed += cut(ray, sx, rests);
     }
     if (removed <= 0.0) return;
     const double w = weight_[index(i, j)];
