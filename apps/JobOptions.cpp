@@ -81,6 +81,23 @@ void addJobOptions(CLI::App& cmd, OptionValues& values, JobCommand command) {
   }
 }
 
+void addReaderOptions(CLI::App& cmd, OptionValues& values) {
+  for (const char* name : {"tool-table", "tool-table-units", "startup-units", "dialect", "machine",
+                           "block-delete", "cutter-comp", "max-moves"}) {
+    const OptionInfo& o = *findJobOption(name);
+    if (o.kind == OptionKind::Flag) {
+      cmd.add_flag_callback(
+          "--" + o.name, [&values, name] { values[name] = "true"; }, o.help);
+      continue;
+    }
+    std::string& target = values[o.name];
+    target = o.defaultText;
+    CLI::Option* opt = addOption(cmd, o, target);
+    // moves reads the program without makeJob: CLI11 checks the choices there.
+    if (o.kind == OptionKind::Choice) opt->check(CLI::IsMember(o.choices).description(""));
+  }
+}
+
 void addToolOptions(CLI::App& cmd, ToolOptions& t, bool required) {
   const std::map<std::string, std::string*> fields = {{"tool", &t.tool},
                                                       {"diameter", &t.diameter},

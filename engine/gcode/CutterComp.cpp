@@ -15,6 +15,11 @@ constexpr double kCorner = 0.05;
 /// rounding below the table's: an inch program's entry move of exactly one radius, and its
 /// hole of exactly the tool's diameter (useful-subroutines.ngc), run there.
 constexpr double kRounding = 1e-12;
+/// An offset arc may sweep this much more than its programmed arc before it counts as too short
+/// for its corner: 0.001 rad in an inch program, 0.0254 rad in a mm one (radians per mm per
+/// program unit), as LinuxCNC 2.9's rs274 (Debian 12) does, found by bisection on an arc entered
+/// 1e-5 to 0.05 rad off tangent. A program's four decimals leave a tangent lead arc that much off.
+constexpr double kTurnTolerance = 0.0254;
 
 using V2 = Eigen::Vector2d;
 
@@ -112,10 +117,11 @@ void CutterCompensation::moveEndpointAndFlush(const V2& p) {
             "cutter compensation made an arc whose ends are at different radii (an inside "
             "corner the arc cannot reach)");
       const double swept = sweptAngle(endpoint_, centre, m.turns, p);
-      if (h.originalTurn != 0.0 && std::abs(swept) > std::abs(h.originalTurn))
+      if (h.originalTurn != 0.0 && endpointValid_ &&
+          std::abs(swept) > std::abs(h.originalTurn) + kTurnTolerance / unit_)
         throw CompensationError(
-            "arc move in concave corner is too short to be reachable by the tool without "
-            "gouging");
+            "arc move in concave corner cannot be reached by the tool without gouging (the "
+            "corner takes more of the arc than it sweeps)");
     } else {
       // The move must not turn back: it would have to be shorter than the corner's retreat.
       if (endpointValid_ && h.direction.dot(p - endpoint_) < 0.0)

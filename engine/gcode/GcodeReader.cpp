@@ -49,6 +49,10 @@ Toolpath readPrograms(const std::vector<std::string>& paths, const ReaderOptions
       c.file += files;
       all.inert.push_back(c);
     }
+    for (Toolpath::Place c : one.unoffsetCompensation) {
+      c.file += files;
+      all.unoffsetCompensation.push_back(c);
+    }
     all.files.insert(all.files.end(), one.files.begin(), one.files.end());
     all.inch = one.inch;
     all.unitsSet = all.unitsSet || one.unitsSet;

@@ -75,6 +75,14 @@ struct ReaderOptions {
   /// Tool diameters (mm) by number for G41/G42 where the tool table gives none (a tool
   /// library of another format: Fusion 360, FreeCAD, a CAMotics project).
   std::map<int, double> toolDiameters;
+  /// G41/G42 with a D register: the register holds only the wear, the CAM having written the
+  /// tool centre's path (Fusion 360's and Mastercam's "wear" compensation, common on Haas and
+  /// Fanuc controls), so the path is offset by nothing; G41.1/G42.1 still offset by their D.
+  /// Off: the register holds the tool's radius (control compensation).
+  bool wearCompensation = false;
+  /// mm: the diameter G41/G42 take for every tool when neither toolTable nor toolDiameters
+  /// gives any (the one --tool of a run without a tool library); 0: none known.
+  double soleToolDiameter = 0.0;
   /// Skip lines that start with '/' (the block delete switch); off as in LinuxCNC's default.
   bool blockDelete = false;
   /// Folders searched for o<name> call subroutine files (<name>.ngc); the program's own

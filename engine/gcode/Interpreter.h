@@ -98,6 +98,9 @@ class Interpreter final : public gcode::ParameterSource {
 
   // ---------------------------------------------------------------- errors
   [[noreturn]] void fail(int column, const std::string& message) const;
+  /// fail() with a compensation error, saying what to do when the program is one of CAM wear
+  /// compensation read as control compensation.
+  [[noreturn]] void failCompensation(int column, const CompensationError& e) const;
 
   // ---------------------------------------------------------------- units and frames
   double unit() const { return inch_ ? kInch : 1.0; }
@@ -344,8 +347,9 @@ class Interpreter final : public gcode::ParameterSource {
   // physicalStart_ (declared above, with out_): where the next move starts when that is not
   // pos_: after G40, the offset point the tool is at (pos_ is the programmed point, as
   // LinuxCNC has it).
-  bool arcNotAllowed_ = false;  ///< the move after G40 must be straight
-  bool startKnown_ = false;     ///< the start position is where the tool is (see ReaderOptions)
+  bool arcNotAllowed_ = false;           ///< the move after G40 must be straight
+  bool compensationByRegister_ = false;  ///< the last G41/G42 took its radius from a D register
+  bool startKnown_ = false;  ///< the start position is where the tool is (see ReaderOptions)
   std::optional<Modal> saved_;
   std::optional<LatheProfile> profile_;
 

@@ -337,7 +337,7 @@ void Interpreter::arc(const Words& w, int column) {
     try {
       comp_.arc(std::move(m));
     } catch (const CompensationError& e) {
-      fail(column, e.what());
+      failCompensation(column, e);
     }
     return;
   }
@@ -353,7 +353,7 @@ void Interpreter::compensated(MoveKind kind, const Vector3d& end, double feed, i
   try {
     comp_.straight(std::move(m));
   } catch (const CompensationError& e) {
-    fail(column, e.what());
+    failCompensation(column, e);
   }
 }
 
@@ -365,7 +365,7 @@ void Interpreter::compensation(int code, const Words& w) {
     try {
       at = comp_.off();
     } catch (const CompensationError& e) {
-      fail(column, e.what());
+      failCompensation(column, e);
     }
     if (offsetting) {
       physicalStart_ = at;
@@ -392,13 +392,21 @@ void Interpreter::compensation(int code, const Words& w) {
     diameter = w.get('D') * unit();
   } else {
     int tool = tool_;
-    if (w.has('D')) {
+    if (options_.wearCompensation) {
+      // The D register holds only the wear: the CAM wrote the tool centre's path.
+      if (w.has('D') && !(w.get('D') >= 0.0))
+        fail(w.column('D'), "expected a register number D with " + codeName('G', code) +
+                                ", found D" + formatNumber(w.get('D')));
+    } else if (w.has('D')) {
       const double d = w.get('D');
       if (!(d >= 0.0) || std::abs(d - std::round(d)) >= 1e-4)
         fail(w.column('D'), "expected a tool number D with " + codeName('G', code) + ", found D" +
                                 formatNumber(d));
       tool = static_cast<int>(std::lround(d));
-      if (!toolDiameters_.count(tool))
+      // D0 offsets by nothing, as on LinuxCNC, Fanuc and Haas; with no table at all, the one
+      // cutter of the run (soleToolDiameter) is every D's.
+      if (tool != 0 && !toolDiameters_.count(tool) &&
+          !(toolDiameters_.empty() && options_.soleToolDiameter > 0.0))
         fail(w.column('D'),
              "expected a tool of the tool table in D (its radius offsets the "
              "path), found D" +
@@ -407,16 +415,32 @@ void Interpreter::compensation(int code, const Words& w) {
                                              : ", which the table does not have"));
     }
     const auto it = toolDiameters_.find(tool);
-    diameter = it == toolDiameters_.end() ? 0.0 : it->second;
+    diameter = options_.wearCompensation || (w.has('D') && tool == 0) ? 0.0
+               : it != toolDiameters_.end()                           ? it->second
+               : toolDiameters_.empty()                               ? options_.soleToolDiameter
+                                                                      : 0.0;
+    if (!options_.wearCompensation && !(diameter > 0.0))
+      out_.unoffsetCompensation.push_back({file_, line_ + 1});
   }
+  compensationByRegister_ = code == G_41 || code == G_42;
   // Fanuc and Haas take G41 (G42) restated while it is on, with the same offset, as a no-op
   // (posts write it on every contour line); LinuxCNC refuses it.
   if (options_.dialect == Dialect::Fanuc && comp_.onAs(side, diameter / 2.0)) return;
   try {
     comp_.on(side, diameter / 2.0, physicalStart_ ? *physicalStart_ : pos_, unit(), plane_);
   } catch (const CompensationError& e) {
-    fail(column, e.what());
+    failCompensation(column, e);
   }
+}
+
+void Interpreter::failCompensation(int column, const CompensationError& e) const {
+  std::string message = e.what();
+  // A program whose path is already the tool centre's fails here with the tool's radius.
+  if (compensationByRegister_ && !options_.wearCompensation)
+    message +=
+        " (if the program's path is already the tool centre's, the CAM's \"wear\" "
+        "compensation with only the wear in the D register, give --cutter-comp wear)";
+  fail(column, message);
 }
 
 void Interpreter::refuseWithCompensation(const Words& w, bool onBefore) {

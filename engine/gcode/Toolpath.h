@@ -119,6 +119,13 @@ struct Toolpath {
     int file = 0, line = 0;
   };
   std::vector<InertCode> inert;
+  /// G41/G42 read as control compensation that offset the path by nothing (D0, or a tool no
+  /// table gives a diameter): the control would offset by its register, which engage does not
+  /// know. Where each is (file index, 1-based line).
+  struct Place {
+    int file = 0, line = 0;
+  };
+  std::vector<Place> unoffsetCompensation;
 };
 
 /// Arcs: radius in the plane, mm.

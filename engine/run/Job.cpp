@@ -415,6 +415,17 @@ void startAboveStock(Job& job, bool project) {
   dropWords(job);
 }
 
+/// --diameter in mm with bare numbers in `sys`, for G41/G42 of a run with the one --tool and no
+/// table; 0 when it is not a length (the cutter's own reading says why).
+double soleToolDiameter(const OptionValues& values, UnitSystem sys) {
+  try {
+    return parseQuantity(optionText(values, "diameter"), Dimension::Length, sys, "--diameter")
+        .value;
+  } catch (const Error&) {
+    return 0.0;
+  }
+}
+
 /// Whether a program's first G20 or G21 (outside comments) says inches; nullopt when it has
 /// neither or cannot be read (the reader then says why).
 std::optional<bool> firstUnitsWord(const std::string& path) {
@@ -436,30 +447,52 @@ std::optional<bool> firstUnitsWord(const std::string& path) {
   return std::nullopt;
 }
 
-/// library that gives its tools (--tools, or the project's table); the project, if it is one.
-std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& values,
-                                              std::optional<ToolLibrary>& library) {
+}  // namespace
+
+ReaderOptions readerOptions(const OptionValues& values, const std::string& program) {
   auto text = [&](const char* name) { return optionText(values, name); };
-  const JobCommand command = job.command;
   ReaderOptions ro;
   ro.toolTable = text("tool-table");
-  // A LinuxCNC tool table's numbers: --tool-table-units, else the program's units (its first
-  // G20 or G21, else the start-up units).
   ro.dialect = dialectOf(text("dialect"));
   ro.blockDelete = text("block-delete") == "true";
+  ro.wearCompensation = text("cutter-comp") == "wear";
   if (!text("machine").empty()) ro.machine = readMachine(text("machine"));
   // The start-up units: --startup-units, else the machine file's.
   const std::string startup = text("startup-units");
   ro.startInch = !startup.empty() ? unitSystemNamed(startup) == UnitSystem::Inch
                                   : ro.machine && ro.machine->startInch;
-  job.startupUnitsGiven = !startup.empty() || (ro.machine && ro.machine->startUnitsGiven);
+  // A LinuxCNC tool table's numbers: --tool-table-units, else the program's units (its first
+  // G20 or G21, else the start-up units).
   if (!text("tool-table-units").empty()) {
     ro.toolTableInch = unitSystemNamed(text("tool-table-units")) == UnitSystem::Inch;
   } else if (!ro.toolTable.empty() || !text("tools").empty()) {  // (a table to read)
     const std::optional<bool> inch =
-        firstUnitsWord(isCamoticsProject(job.program) ? std::string() : job.program);
+        firstUnitsWord(isCamoticsProject(program) ? std::string() : program);
     ro.toolTableInch = inch ? *inch : ro.startInch;
   }
+  const int maxMoves = wholeNumber(text("max-moves"), "--max-moves");
+  if (maxMoves < 1) throw ParameterError("--max-moves must be positive");
+  ro.maxMoves = static_cast<std::size_t>(maxMoves);
+  return ro;
+}
+
+namespace {
+
+/// Read the program (or a CAMotics project's programs) into job.path, with the tool
+/// library that gives its tools (--tools, or the project's table); the project, if it is one.
+std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& values,
+                                              std::optional<ToolLibrary>& library) {
+  auto text = [&](const char* name) { return optionText(values, name); };
+  const JobCommand command = job.command;
+  ReaderOptions ro = readerOptions(values, job.program);
+  if (!text("tool").empty() && text("tools").empty() && ro.toolTable.empty() &&
+      !isCamoticsProject(job.program)) {
+    const std::optional<bool> inch = firstUnitsWord(job.program);
+    ro.soleToolDiameter = soleToolDiameter(
+        values, inch.value_or(ro.startInch) ? UnitSystem::Inch : UnitSystem::Metric);
+  }
+  job.startupUnitsGiven =
+      !text("startup-units").empty() || (ro.machine && ro.machine->startUnitsGiven);
   job.toolTableInch = ro.toolTableInch;
   job.toolsFile = text("tools");
   // A CAMotics project: its programs, its tool table (unless --tools), its workpiece (unless
@@ -484,11 +517,8 @@ std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& valu
   if (library && library->format != "linuxcnc")
     for (const ToolEntry& t : library->tools)
       if (t.cutter) ro.toolDiameters.emplace(t.number, 2.0 * t.cutter->radius());
-  const int maxMoves = wholeNumber(text("max-moves"), "--max-moves");
   const int maxSteps = wholeNumber(text("max-steps"), "--max-steps");
-  if (maxMoves < 1) throw ParameterError("--max-moves must be positive");
   if (maxSteps < 1) throw ParameterError("--max-steps must be positive");
-  ro.maxMoves = static_cast<std::size_t>(maxMoves);
   job.path = project ? readPrograms(project->files, ro) : readProgram(job.program, ro);
   job.reader = ro;
   job.simulation.maxSteps = static_cast<std::size_t>(maxSteps);
@@ -673,6 +703,17 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
       if (!text(name).empty())
         throw ParameterError("--" + std::string(name) +
                              " describes the --tool cutter; give --tool");
+  }
+  // G41/G42 of a program cut with the one --tool and no table offset by its radius: the
+  // program was read with --diameter in its first G20/G21's units, read again if that was not
+  // the units its numbers are read in.
+  if (single && !library && job.reader.toolTable.empty() &&
+      job.reader.soleToolDiameter != soleToolDiameter(values, sys)) {
+    ReaderOptions ro = job.reader;
+    ro.soleToolDiameter = soleToolDiameter(values, sys);
+    job.path = project ? readPrograms(project->files, ro) : readProgram(job.program, ro);
+    job.reader = ro;
+    dropWords(job);
   }
   chooseCutters(job, library, single, project ? 1 : 0);
   toolPartOptions(job, values, single, sys);

@@ -104,6 +104,10 @@ std::vector<OptionInfo> makeTable() {
       choice("dialect", G::Simulation, {"linuxcnc", "fanuc", "grbl"}, "linuxcnc",
              "the controller the program is for: linuxcnc, fanuc (M98 P with the count in its "
              "leading digits) or grbl (ignores an arc's off-plane centre word)"),
+      choice("cutter-comp", G::Simulation, {"control", "wear"}, "control",
+             "what a G41/G42 D register holds: control (the tool's radius from --tools or "
+             "--tool-table: the control offsets the part's outline) or wear (only the wear: the "
+             "CAM's path is already the tool centre's, its \"wear\" compensation)"),
       plain("machine", K::Text, G::Simulation, "",
             "machine description (JSON: work offset, G28/G30, start position, travel) so that "
             "G53, G28 and G30 go where the machine puts them"),

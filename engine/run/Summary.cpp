@@ -513,6 +513,23 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
                   ": M codes engage does not know, taken as machine functions that move no axis "
                   "(a chip conveyor, a user M code's script); check them on the machine");
   }
+  // Control compensation that offset nothing: the control would use its register.
+  if (!job.path.unoffsetCompensation.empty()) {
+    std::string lines;
+    std::size_t shown = 0;
+    for (const Toolpath::Place& p : job.path.unoffsetCompensation) {
+      if (++shown > 4) break;
+      lines +=
+          (lines.empty() ? "" : ", ") +
+          (p.file == 0 ? std::string() : job.path.files[static_cast<std::size_t>(p.file)] + ":") +
+          std::to_string(p.line);
+    }
+    w.push_back("G41/G42 offset the path by nothing (line" +
+                std::string(job.path.unoffsetCompensation.size() > 1 ? "s " : " ") + lines +
+                "): D0, or a tool without a diameter; on the machine the control offsets by its "
+                "register (give the tools' diameters with --tools or --tool-table, or "
+                "--cutter-comp wear when the path is already the tool centre's)");
+  }
   // Where the answer cannot be trusted: a grid too coarse for the tool or the stock.
   // The diameter the narrowest-cutting tool engages at the program's depths (Resolution.h).
   const ProgramEngagement& e = job.cellChoice.engagement;

@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -501,6 +502,107 @@ TEST_CASE("cutter radius compensation: the tool a radius to the side, corners as
              Contains("expected a D word (the tool's diameter) with G41.1"));
   CHECK_THAT(errorOf("G21 F100\nG41.1 D10 G1 X20\nG81 X30 Y0 Z-1 R1\n"),
              Contains("expected G0, G1, G2 or G3 with cutter radius compensation on, found G81"));
+}
+
+TEST_CASE("cutter compensation: lead arcs larger than the tool, and LinuxCNC's sweep tolerance",
+          "[gcode][comp]") {
+  {
+    INFO("a pocket entered and left on arcs of 0.3 in with a 0.5 in tool (a Haas/Fusion lead)");
+    // Hand-computed: the tool inside each lead arc, 0.3 - 0.25 = 0.05 in from its centre; the
+    // lead-out arc's end lies exactly on the G40 move's line (an end a rounding past the
+    // programmed sweep was refused before).
+    const auto m = moves(
+        "G20 G17 F30\nG0 X0.7 Y1\nG41.1 D0.5 G1 X0.7 Y0.3\nG3 X1 Y0 I0.3 J0\nG1 X2\nG1 Y2\n"
+        "G1 X0\nG1 Y0\nG1 X1\nG3 X1.3 Y0.3 I0 J0.3\nG1 G40 X1.3 Y1\nM2\n");
+    REQUIRE(m.size() == 10);
+    REQUIRE(m[2].kind == MoveKind::Arc);
+    checkPoint(m[2].end, 1.0 * 25.4, 0.25 * 25.4, 0);
+    checkPoint(m[2].center, 1.0 * 25.4, 0.3 * 25.4, 0);
+    REQUIRE(m[8].kind == MoveKind::Arc);
+    checkPoint(m[8].start, 1.0 * 25.4, 0.25 * 25.4, 0);
+    checkPoint(m[8].end, 1.05 * 25.4, 0.3 * 25.4, 0);
+    checkPoint(m[9].end, 1.3 * 25.4, 1.0 * 25.4, 0);
+  }
+  // An inside arc of radius 2.2 entered phi off tangent from a line, with a 4 mm tool: the tool's
+  // arc (radius 0.2) starts where the line's offset ends, which puts its start about 10 phi
+  // behind the programmed start; a corner right after it (G40) keeps the whole offset arc, which
+  // then sweeps that much more than the programmed one. LinuxCNC 2.9's rs274 (Debian 12) allows
+  // 0.001 rad in an inch program and 0.0254 rad in a mm one; measured by bisection on this very
+  // program (0.0200 rad runs and 0.0270 is refused in mm, 0.0008 runs and 0.0012 is refused in
+  // inches), and engage agrees on each.
+  const auto offTangent = [](const char* units, double phi) {
+    const double R = 2.2, cx = 20.0 - R * std::sin(phi), cy = R * std::cos(phi);
+    const double a1 = std::atan2(-cy, 20.0 - cx) + 1.0;
+    const double ex = cx + R * std::cos(a1), ey = cy + R * std::sin(a1);
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "%s G17 F100\nG0 X0 Y-5\nG41.1 D4 G1 X0 Y0\nG1 X20 Y0\n"
+                  "G3 X%.9f Y%.9f I%.9f J%.9f\nG40 G1 X%.9f Y%.9f\nM2\n",
+                  units, ex, ey, cx - 20.0, cy, ex - 5.0 * std::sin(a1) + 3.0,
+                  ey + 5.0 * std::cos(a1));
+    return errorOf(text);
+  };
+  CHECK(offTangent("G21", -0.002).empty());
+  CHECK_THAT(offTangent("G21", -0.0027),
+             Contains("test.ngc:6:1: arc move in concave corner cannot be reached by the tool "
+                      "without gouging"));
+  CHECK(offTangent("G20", -0.00008).empty());
+  CHECK_THAT(offTangent("G20", -0.00012), Contains("arc move in concave corner"));
+}
+
+TEST_CASE("compensation by wear, D0, and the run's one tool", "[gcode][comp]") {
+  // An outside corner of a tool-centre path (CAM wear compensation), entered 0.01 in long.
+  const std::string program =
+      "G20 G17 F30\nG0 X0.25 Y-0.3\nG41 D1 G1 Y-0.29\nG1 Y1\nG1 X1\nG40 G1 X1.2\nM2\n";
+  {
+    INFO("wear: the D register holds the wear alone, the path is the tool centre's as written");
+    ReaderOptions o;
+    o.wearCompensation = true;
+    o.toolDiameters = {{1, 12.7}};  // the tool's 0.5 in: not what a wear register offsets by
+    const Toolpath p = run(program, o);
+    REQUIRE(p.moves.size() == 5);
+    checkPoint(p.moves[1].end, 0.25 * 25.4, -0.29 * 25.4, 0);
+    checkPoint(p.moves[2].end, 0.25 * 25.4, 1.0 * 25.4, 0);
+    checkPoint(p.moves[3].end, 1.0 * 25.4, 1.0 * 25.4, 0);
+    CHECK(p.unoffsetCompensation.empty());
+  }
+  {
+    INFO("control: the same program offset by the tool's radius cannot enter, and says why");
+    ReaderOptions o;
+    o.toolDiameters = {{1, 12.7}};
+    try {
+      run(program, o);
+      FAIL("read as control compensation, the 0.01 in entry was taken");
+    } catch (const GcodeError& e) {
+      CHECK_THAT(e.what(), Contains("test.ngc:3:8: length of cutter compensation entry move is "
+                                    "not greater than the tool radius") &&
+                               Contains("give --cutter-comp wear"));
+    }
+  }
+  {
+    INFO("D0 offsets by nothing (LinuxCNC's rs274 agrees) and is named");
+    const Toolpath p =
+        run("G21 G17 F100\nG0 X-10 Y-10\nG41 D0 G1 X0 Y0\nG1 X20\nG40 G1 X30 Y-10\nM2\n");
+    REQUIRE(p.moves.size() == 4);
+    checkPoint(p.moves[2].end, 20, 0, 0);
+    REQUIRE(p.unoffsetCompensation.size() == 1);
+    CHECK(p.unoffsetCompensation[0].line == 3);
+  }
+  {
+    INFO("no table: G41 without D, and with any D, takes the run's one tool (6 mm)");
+    ReaderOptions o;
+    o.soleToolDiameter = 6.0;
+    for (const char* d : {"", " D1"}) {
+      const Toolpath p = run(std::string("G21 G17 F100\nT1 M6\nG0 X-10 Y-10\nG41") + d +
+                                 " G1 X0 Y0\nG1 X20\nG40 G1 X30 Y-10\nM2\n",
+                             o);
+      // The entry, an arc round the outside corner, then along +X a radius to its left.
+      REQUIRE(p.moves.size() == 5);
+      CHECK(p.moves[2].kind == MoveKind::Arc);
+      checkPoint(p.moves[3].end, 20, 3, 0);
+      CHECK(p.unoffsetCompensation.empty());
+    }
+  }
 }
 
 TEST_CASE("M98/M99 subprograms, Fanuc's repeat digits and grbl's off-plane word", "[gcode]") {
