@@ -48,6 +48,8 @@ class CutterCompensation {
           Plane plane = Plane::XY);
   /// Compensation is on (G41/G42 given, G40 not yet).
   bool on() const { return side_ != Off; }
+  /// The side the tool is on (Off after G40).
+  Side side() const { return side_; }
   /// Whether it is on to `side` with `radius` (mm).
   bool onAs(Side side, double radius) const { return side_ == side && radius_ == radius; }
   /// Moves are offset (on, with a radius above 0: with radius 0 they run as programmed).

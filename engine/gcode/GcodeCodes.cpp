@@ -133,6 +133,7 @@ int mGroup(int m) {
     case M_2:
     case M_30:
     case M_60:
+    case M_97:
     case M_98:
     case M_99:
       return 4;

@@ -63,6 +63,7 @@ enum GCode : int {
   G_61 = 610,
   G_61_1 = 611,
   G_64 = 640,
+  G_65 = 650,  ///< Fanuc/Haas macro call: run by the interpreter's loop, not a modal group
   G_70 = 700,
   G_71 = 710,
   G_71_1 = 711,
@@ -131,6 +132,7 @@ enum MCode : int {
   M_71 = 710,
   M_72 = 720,
   M_73 = 730,
+  M_97 = 970,
   M_98 = 980,
   M_99 = 990,
 };

@@ -39,10 +39,12 @@
 
 namespace engage {
 
-/// Which controller's reading of the few words they differ on: LinuxCNC (the default),
-/// Fanuc/Haas (M98 P with the repeat count in its leading digits), grbl (the off-plane
-/// centre word of an arc, which FreeCAD's grbl post writes, ignored).
-enum class Dialect { LinuxCNC, Fanuc, Grbl };
+/// Which controller's reading of the words they differ on: LinuxCNC (the default); Fanuc (M98 P
+/// with the repeat count in its leading digits, custom macro B: G65 calls with arguments, IF,
+/// WHILE, GOTO, vacant variables, the system variables #2001-#5043 a program reads); Haas
+/// (Fanuc's, with the NGC variables #10000-#10999 and M97 local subprograms); grbl (the
+/// off-plane centre word of an arc, which FreeCAD's grbl post writes, ignored).
+enum class Dialect { LinuxCNC, Fanuc, Haas, Grbl };
 
 /// The machine a program runs on (engine/run/Machine.h reads it from a file), in its own
 /// coordinates (mm): where G54's origin is, where G28 and G30 go, where the tool tip is when

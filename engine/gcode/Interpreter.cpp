@@ -122,9 +122,120 @@ void Interpreter::toWorkFrame(const MachineSetup& m) {
   }
 }
 
+namespace {
+
+/// Haas NGC's #10000-#10999 on their legacy numbers (0: none, stored apart).
+int haasLegacy(int n) {
+  const int legacy = n - 10000;
+  const bool mapped = (legacy >= 100 && legacy <= 199) || (legacy >= 500 && legacy <= 699) ||
+                      (legacy >= 800 && legacy <= 999);
+  return mapped ? legacy : 0;
+}
+
+[[noreturn]] void needsMachine(int n, const char* what) {
+  throw std::out_of_range("expected a variable a simulation can give, found #" + std::to_string(n) +
+                          " (" + what + ": only the machine knows it)");
+}
+
+}  // namespace
+
+bool Interpreter::systemVariable(int n, double& value) const {
+  if (n == 0) {
+    value = gcode::vacantValue();
+    return true;
+  }
+  if (n >= 1000 && n <= 1999) needsMachine(n, "an input, output or axis load");
+  // Tool offsets as Haas numbers them: lengths, their wear, radii, their wear (program units).
+  if (n >= 2001 && n <= 2800) {
+    const int tool = (n - 2001) % 200 + 1;
+    value = 0.0;  // (the wears)
+    if (n <= 2200) {
+      const auto it = toolLengths_.find(tool);
+      value = it == toolLengths_.end() ? 0.0 : it->second / unit();
+    } else if (n >= 2401 && n <= 2600) {
+      const auto it = toolDiameters_.find(tool);
+      value = it == toolDiameters_.end() ? 0.0 : it->second / 2.0 / unit();
+    }
+    return true;
+  }
+  if ((n >= 3001 && n <= 3002) || (n >= 3011 && n <= 3012) || (n >= 3020 && n <= 3028))
+    needsMachine(n, "a timer or the date");
+  if (n >= 4001 && n <= 4999) {
+    // The modal state, as Fanuc numbers its groups (#4001 group 1, ...), and T, F, S.
+    const double compensation = comp_.side() == CutterCompensation::Left    ? 41.0
+                                : comp_.side() == CutterCompensation::Right ? 42.0
+                                                                            : 40.0;
+    switch (n) {
+      case 4001:
+        value = motion_ / 10.0;
+        return true;
+      case 4002:
+        value = plane_ == Plane::XY ? 17.0 : plane_ == Plane::XZ ? 18.0 : 19.0;
+        return true;
+      case 4003:
+        value = incremental_ ? 91.0 : 90.0;
+        return true;
+      case 4005:
+        value = feedMode_ == FeedMode::InverseTime          ? 93.0
+                : feedMode_ == FeedMode::UnitsPerRevolution ? 95.0
+                                                            : 94.0;
+        return true;
+      case 4006:
+        value = inch_ ? 20.0 : 21.0;
+        return true;
+      case 4007:
+        value = compensation;
+        return true;
+      case 4010:
+        value = retractToR_ ? 99.0 : 98.0;
+        return true;
+      case 4014:
+        value = 53.0 + params_[5220];
+        return true;
+      case 4109:
+        value = feed_ / (feedMode_ == FeedMode::InverseTime ? 1.0 : unit());
+        return true;
+      case 4119:
+        value = spindleSpeed_;
+        return true;
+      case 4120:
+        value = tool_;
+        return true;
+      default:
+        needsMachine(n, "modal information engage does not keep");
+    }
+  }
+  if (n >= 5001 && n <= 5199) {
+    const int axis = (n - 1) % 20;      // 0 X, 1 Y, 2 Z
+    const int block = (n - 5001) / 20;  // 0 end point, 1 machine, 2 work, 3 skip, 4 tool offset
+    if (axis <= 2 && block <= 2) {
+      value = block == 1 ? pos_[axis] / unit() : programPosition()[axis];
+      return true;
+    }
+    if (axis <= 2 && block == 3) return false;  // #5061-#5063: the probe's (G38.2)
+    if (axis <= 2 && block == 4) {
+      value = axis == 2 ? toolLength_ / unit() : 0.0;
+      return true;
+    }
+    if (n >= 5161) return false;  // G28, G30 (as LinuxCNC keeps them)
+    needsMachine(n, "an axis state engage does not keep");
+  }
+  return false;
+}
+
 double Interpreter::numbered(int n) const {
+  if (fanucLike()) {
+    double value = 0.0;
+    if (systemVariable(n, value)) return value;
+    if (options_.dialect == Dialect::Haas && n >= 10000 && n <= 10999) {
+      if (const int legacy = haasLegacy(n)) return params_[static_cast<std::size_t>(legacy)];
+      const auto it = extendedVariables_.find(n);
+      return it == extendedVariables_.end() ? 0.0 : it->second;
+    }
+  }
   if (n < 1 || n > kParameterCount)
     throw std::out_of_range("expected a parameter number in 1.." + std::to_string(kParameterCount) +
+                            (options_.dialect == Dialect::Haas ? " or 10000..10999" : "") +
                             ", found #" + std::to_string(n));
   if (n >= 5420 && n <= 5422) return programPosition()[n - 5420];
   if (n == 5400) return tool_;
@@ -274,9 +385,31 @@ void Interpreter::execute(std::size_t returnDepth) {
       ++line_;
       continue;
     }
-    const bool empty = block.words.empty() && block.assignments.empty() && !block.hasOWord;
+    const bool empty = block.words.empty() && block.assignments.empty() && !block.hasOWord &&
+                       block.macro.kind == gcode::MacroStatement::None;
     if (!empty) seenContent = true;
     if (block.blockDelete && options_.blockDelete) {
+      ++line_;
+      continue;
+    }
+    if (fanucLike())
+      for (const gcode::Assignment& a : block.assignments)
+        if (a.name.empty() && a.number == 3000)
+          fail(a.column,
+               "expected the program to go on, found alarm #3000 = " + formatNumber(a.value) +
+                   (block.comments.empty() ? "" : " (" + block.comments[0] + ")") +
+                   ": the control stops the program here");
+    if (block.macro.kind != gcode::MacroStatement::None) {
+      for (const gcode::Assignment& a : block.assignments)  // IF .. THEN's, when it holds
+        assign(a);
+      macroFlow(block);
+      if (frames_.size() < returnDepth) return;
+      continue;
+    }
+    if (std::any_of(block.words.begin(), block.words.end(), [](const gcode::Word& word) {
+          return word.letter == 'G' && codeOf(word.value) == G_65;
+        })) {
+      macroCall(block);
       ++line_;
       continue;
     }
@@ -308,6 +441,29 @@ void Interpreter::assign(const gcode::Assignment& a) {
       (frames_.empty() ? topLocals_ : frames_.back().locals)[a.name] = a.value;
     return;
   }
+  if (fanucLike()) {
+    const int n = a.number;
+    auto readOnly = [&](const char* what) {
+      fail(a.column, "expected a variable a program can set, found #" + std::to_string(n) + " (" +
+                         what + ") on the left of '='");
+    };
+    if (n == 0) readOnly("vacant, always");
+    if (n >= 1000 && n <= 1999 && !(n >= 1100 && n <= 1155)) readOnly("an input or axis load");
+    if (n >= 1100 && n <= 1155) return;  // an output: it moves nothing
+    if (n >= 2001 && n <= 2800) readOnly("a tool offset: give it in the tool table");
+    if ((n >= 3001 && n <= 3002) || (n >= 3011 && n <= 3012) || (n >= 3020 && n <= 3028))
+      readOnly("a timer or the date");
+    if (n >= 4001 && n <= 4999) readOnly("the modal state");
+    if (n >= 5001 && n <= 5160) readOnly("a position");
+    if (n == 3003 || n == 3004 || n == 3006) return;  // single block, feed hold, stop: no motion
+    if (options_.dialect == Dialect::Haas && n >= 10000 && n <= 10999) {
+      if (const int legacy = haasLegacy(n))
+        params_[static_cast<std::size_t>(legacy)] = a.value;
+      else
+        extendedVariables_[n] = a.value;
+      return;
+    }
+  }
   if (a.number >= 5420 && a.number <= 5422)
     fail(a.column, "expected a writable parameter, found #" + std::to_string(a.number) +
                        " (the current position) on the left of '='");
@@ -335,18 +491,22 @@ Interpreter::Words Interpreter::collect(const Block& b) {
         // An M code engage does not know moves no axis on the machines it reads for (Haas
         // M31/M33 chip conveyor, LinuxCNC's user M100-M199 scripts, ...): taken as inert, and
         // named in the run's warnings. Haas M96/M97 jump within the program: refused.
-        if (L == 'M' && code % 10 == 0 && code != 960 && code != 970) {
+        if (L == 'M' && code % 10 == 0 && code != 960) {
           out_.inert.push_back({code / 10, file_, line_ + 1});
           continue;
         }
-        if (L == 'M' && (code == 960 || code == 970))
+        if (L == 'M' && code == 960)
           fail(word.column,
-               "expected an M code engage interprets, found " + codeName('M', code) + " (Haas " +
-                   (code == 960 ? "M96 jump on an input" : "M97 local subprogram call") +
-                   ": not interpreted; use M98 with an O-numbered subprogram)");
+               "expected an M code engage interprets, found M96 (Haas: a jump on an input, "
+               "which only the machine knows)");
         fail(word.column,
              std::string("expected a known ") + L + " code, found " + codeName(L, code));
       }
+      if (L == 'M' && code == M_97 && options_.dialect != Dialect::Haas)
+        fail(word.column,
+             "expected --dialect haas for M97 (a Haas local subprogram call), found the " +
+                 std::string(options_.dialect == Dialect::Fanuc ? "Fanuc" : "LinuxCNC") +
+                 " dialect");
       auto& groups = L == 'G' ? gGroups : mGroups;
       const bool coolantPair = L == 'M' && group == 8 && (code == G_7 || code == G_8);
       auto it = groups.find(group);
@@ -585,6 +745,7 @@ bool Interpreter::executeBlock(const Block& b) {
   for (const auto& [code, c] : w.m)
     if (code == M_2 || code == M_30) return true;
   if (w.hasM(M_98)) subprogramCall(w);
+  if (w.hasM(M_97)) localSubprogramCall(w);
   if (w.hasM(M_99)) {
     if (frames_.empty()) return true;  // M99 in the main program ends it (as LinuxCNC)
     subprogramReturn(w.mColumn(M_99));

@@ -94,6 +94,10 @@ class Interpreter final : public gcode::ParameterSource {
     bool m98 = false;
     int startFile = 0, startLine = 0;
     long repeats = 0;
+    /// A G65 macro call (also m98: it ends with M99): the caller's locals #1-#33, back on
+    /// return.
+    bool g65 = false;
+    std::array<double, 33> callerLocals{};
   };
 
   // ---------------------------------------------------------------- errors
@@ -209,8 +213,46 @@ class Interpreter final : public gcode::ParameterSource {
   /// carries the count in its leading digits (P30001234: O1234 three times).
   void subprogramCall(const Words& w);
 
-  /// M99: back after the M98 that called, or once more from the subprogram's start.
+  /// M99: back after the M98, M97 or G65 that called, or once more from the subprogram's
+  /// start.
   void subprogramReturn(int column);
+
+  /// Haas M97 P<n> [L<times>]: runs this program from its line N<n> until M99, L times.
+  void localSubprogramCall(const Words& w);
+
+  /// Fanuc/Haas G65 P<program> [L<times>] <arguments>: a macro call; the arguments A-Z
+  /// (but G, L, N, O, P) into a fresh set of locals #1-#26 as Fanuc's argument
+  /// specification I, the others vacant; the caller's back after the macro's M99. The run loop
+  /// goes on with the line after the macro's O line (or the G65's, for L0).
+  void macroCall(const Block& b);
+
+  /// Starts a subprogram frame (M98, M97, G65) at file `file`, line `line` (the run loop goes
+  /// on with the line after it), run `times` times.
+  Frame& enterSubprogram(int file, int line, long times, int column);
+
+  // ---------------------------------------------------------------- custom macro B
+  /// Fanuc and Haas (custom macro B and G65): the dialects that run them.
+  bool fanucLike() const {
+    return options_.dialect == Dialect::Fanuc || options_.dialect == Dialect::Haas;
+  }
+  /// IF .. GOTO, IF .. THEN, WHILE .. DO, DO, END, GOTO at line_.
+  void macroFlow(const Block& b);
+  /// The line GOTO n jumps to: the line N<n> of the program (O number) it is in, searched
+  /// forward from the current line, then from the program's start.
+  int lineNumbered(double n, int column) const;
+  /// The END m closing the WHILE .. DO m / DO m at line_, or the WHILE / DO opening the END m
+  /// there.
+  int loopPartner(const gcode::MacroStatement& m, int column) const;
+  /// A Fanuc or Haas system variable's value for reading (true), or false when `n` is an
+  /// ordinary variable; throws std::out_of_range with the message for one that needs a
+  /// machine.
+  bool systemVariable(int n, double& value) const;
+  /// Where #n is stored: Haas's #10000-#10999 on their legacy numbers (#100-#199, #500-#699,
+  /// #800-#999) or in extendedVariables_; nullptr for a number outside every range.
+  double* variable(int n);
+  const double* variable(int n) const;
+  /// Haas NGC variables without a legacy number (#10200-#10499, #10700-#10799).
+  std::map<int, double> extendedVariables_;
 
   void saveModal();
   void restoreModal();

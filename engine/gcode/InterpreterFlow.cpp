@@ -255,18 +255,110 @@ void Interpreter::subprogramCall(const Words& w) {
   if (targetFile < 0)
     fail(w.column('P'), "expected a subprogram O" + label + " (in this program or as " + label +
                             ".ngc beside it), found none");
+  enterSubprogram(targetFile, targetLine, times, column);
+}
+
+Interpreter::Frame& Interpreter::enterSubprogram(int file, int line, long times, int column) {
   if (frames_.size() >= 64)
     fail(column, "expected subprogram calls nested at most 64 deep, found deeper recursion");
   Frame f;
   f.file = file_;
   f.returnLine = line_ + 1;
   f.m98 = true;
-  f.startFile = targetFile;
-  f.startLine = targetLine;
+  f.startFile = file;
+  f.startLine = line;
   f.repeats = times - 1;
   frames_.push_back(std::move(f));
-  file_ = targetFile;
-  line_ = targetLine;  // (the run loop goes on with the next line)
+  file_ = file;
+  line_ = line;  // (the run loop goes on with the next line)
+  return frames_.back();
+}
+
+namespace {
+
+/// A repeat count L of M97, M98 or G65: a whole number in 0..1e9; -1 when it is not.
+long repeatCount(double l) {
+  if (!(l >= 0.0) || std::abs(l - std::round(l)) > 1e-9 || l > 1e9) return -1;
+  return std::lround(l);
+}
+
+}  // namespace
+
+void Interpreter::localSubprogramCall(const Words& w) {
+  const int column = w.mColumn(M_97);
+  if (!w.has('P')) fail(column, "expected a P word (the line number N) with M97, found none");
+  long times = 1;
+  if (w.has('L')) {
+    times = repeatCount(w.get('L'));
+    if (times < 0)
+      fail(w.column('L'), "expected a repeat count L with M97, found L" + formatNumber(w.get('L')));
+  }
+  if (times == 0) return;
+  const int target = lineNumbered(w.get('P'), w.column('P'));
+  enterSubprogram(file_, target - 1, times, column);
+}
+
+void Interpreter::macroCall(const Block& b) {
+  int column = 1;
+  for (const gcode::Word& word : b.words)
+    if (word.letter == 'G' && codeOf(word.value) == G_65) column = word.column;
+  if (!fanucLike())
+    fail(column, "expected --dialect fanuc or haas for G65 (a Fanuc/Haas macro call), found the " +
+                     std::string(options_.dialect == Dialect::Grbl ? "grbl" : "LinuxCNC") +
+                     " dialect");
+  // Fanuc's argument specification I: the local each letter sets.
+  static const std::map<char, int> local = {
+      {'A', 1},  {'B', 2},  {'C', 3},  {'I', 4},  {'J', 5},  {'K', 6},  {'D', 7},
+      {'E', 8},  {'F', 9},  {'H', 11}, {'M', 13}, {'Q', 17}, {'R', 18}, {'S', 19},
+      {'T', 20}, {'U', 21}, {'V', 22}, {'W', 23}, {'X', 24}, {'Y', 25}, {'Z', 26}};
+  std::optional<double> program, repeats;
+  std::array<double, 33> locals;
+  locals.fill(gcode::vacantValue());
+  std::array<bool, 33> given{};
+  for (const gcode::Word& word : b.words) {
+    if (word.letter == 'G') {
+      if (codeOf(word.value) != G_65)
+        fail(word.column, "expected only G65 and its arguments on a macro call's line, found G" +
+                              formatNumber(word.value));
+      continue;
+    }
+    if (word.letter == 'P') {
+      program = word.value;
+    } else if (word.letter == 'L') {
+      repeats = word.value;
+    } else if (const auto it = local.find(word.letter); it != local.end()) {
+      const std::size_t i = static_cast<std::size_t>(it->second - 1);
+      if (given[i])
+        fail(word.column, std::string("expected each argument once in G65 (argument "
+                                      "specification I), found ") +
+                              word.letter + " again");
+      given[i] = true;
+      locals[i] = word.value;
+    } else {
+      fail(word.column,
+           std::string("expected a G65 argument (A-Z but G, L, N, O, P), found ") + word.letter);
+    }
+  }
+  if (b.corner) fail(b.corner->column, "expected no corner word on a G65 line, found one");
+  if (!program) fail(column, "expected a P word (the macro's program number) with G65, found none");
+  const long number = repeatCount(*program);
+  if (number < 0)
+    fail(column, "expected a program number P with G65, found P" + formatNumber(*program));
+  const long times = repeats ? repeatCount(*repeats) : 1;
+  if (times < 0)
+    fail(column, "expected a repeat count L with G65, found L" + formatNumber(*repeats));
+  if (times == 0) return;
+  const std::string label = std::to_string(number);
+  const auto [targetFile, targetLine] = findLabel(label, "program", label + ".ngc", true);
+  if (targetFile < 0)
+    fail(column, "expected a macro program O" + label + " (in this program or as " + label +
+                     ".ngc beside it), found none");
+  Frame& f = enterSubprogram(targetFile, targetLine, times, column);
+  f.g65 = true;
+  for (std::size_t i = 0; i < 33; ++i) {
+    f.callerLocals[i] = params_[i + 1];
+    params_[i + 1] = locals[i];
+  }
 }
 
 void Interpreter::subprogramReturn(int column) {
@@ -283,7 +375,87 @@ void Interpreter::subprogramReturn(int column) {
   }
   file_ = f.file;
   line_ = f.returnLine - 1;
+  if (f.g65)
+    for (std::size_t i = 0; i < 33; ++i)
+      params_[i + 1] = f.callerLocals[i];
   frames_.pop_back();
+}
+
+void Interpreter::macroFlow(const Block& b) {
+  const gcode::MacroStatement& m = b.macro;
+  if (!fanucLike())
+    fail(m.column,
+         "expected --dialect fanuc or haas for Fanuc/Haas custom macro B (IF, WHILE, "
+         "DO, END, GOTO), found the " +
+             std::string(options_.dialect == Dialect::Grbl ? "grbl" : "LinuxCNC") +
+             " dialect (its control flow is O-words)");
+  using K = gcode::MacroStatement;
+  switch (m.kind) {
+    case K::IfGoto:
+      line_ = m.condition != 0.0 ? lineNumbered(m.target, m.column) : line_ + 1;
+      return;
+    case K::Goto:
+      line_ = lineNumbered(m.target, m.column);
+      return;
+    case K::While:
+      line_ = m.condition != 0.0 ? line_ + 1 : loopPartner(m, m.column) + 1;
+      return;
+    case K::End:
+      line_ = loopPartner(m, m.column);  // the WHILE, evaluated again (or the DO)
+      return;
+    default:  // IF .. THEN (its assignment is the block's), DO
+      ++line_;
+      return;
+  }
+}
+
+int Interpreter::lineNumbered(double n, int column) const {
+  const SourceFile& f = *files_[static_cast<std::size_t>(file_)];
+  const int count = static_cast<int>(f.lines.size());
+  // The program (O number) the current line is in: from its O line to the next one.
+  std::string unused;
+  int first = 0, last = count;
+  for (int i = line_; i >= 0; --i)
+    if (gcode::peekProgramNumber(f.lines[static_cast<std::size_t>(i)], unused)) {
+      first = i;
+      break;
+    }
+  for (int i = line_ + 1; i < count; ++i)
+    if (gcode::peekProgramNumber(f.lines[static_cast<std::size_t>(i)], unused)) {
+      last = i;
+      break;
+    }
+  double number = 0.0;
+  for (int pass = 0; pass < 2; ++pass)
+    for (int i = pass == 0 ? line_ + 1 : first; i < (pass == 0 ? last : line_ + 1); ++i)
+      if (gcode::peekLineNumber(f.lines[static_cast<std::size_t>(i)], number) &&
+          std::abs(number - n) < 1e-9)
+        return i;
+  fail(column, "expected a line N" + formatNumber(n) + " in this program to go to, found none");
+}
+
+int Interpreter::loopPartner(const gcode::MacroStatement& m, int column) const {
+  const SourceFile& f = *files_[static_cast<std::size_t>(file_)];
+  const int loop = static_cast<int>(std::lround(m.target));
+  const bool forward = m.kind != gcode::MacroStatement::End;
+  int depth = 0;
+  for (int i = forward ? line_ + 1 : line_ - 1;
+       forward ? i < static_cast<int>(f.lines.size()) : i >= 0; i += forward ? 1 : -1) {
+    int other = 0;
+    const auto kind = gcode::peekMacroLoop(f.lines[static_cast<std::size_t>(i)], other);
+    if (kind == gcode::MacroStatement::None || other != loop) continue;
+    const bool opens = kind != gcode::MacroStatement::End;
+    if (opens == forward) {
+      ++depth;  // (the same number nested: not on a Fanuc control, matched inside out here)
+    } else if (depth > 0) {
+      --depth;
+    } else {
+      return i;
+    }
+  }
+  fail(column, forward ? "expected END " + std::to_string(loop) + " closing this loop, found none"
+                       : "expected WHILE .. DO " + std::to_string(loop) + " or DO " +
+                             std::to_string(loop) + " opening this END, found none");
 }
 
 }  // namespace engage::gcode

@@ -4,15 +4,44 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 
 namespace engage::gcode {
-namespace {
 
+namespace {
 constexpr double kDegree = kPi / 180.0;
 /// LinuxCNC compares EQ/NE with this absolute tolerance.
 constexpr double kEqualTolerance = 0.0001;
+constexpr std::uint64_t kVacantBits = 0x7ff8'0000'0000'7acaULL;  // a quiet NaN, payload 0x7aca
+}  // namespace
+
+double vacantValue() {
+  double v;
+  std::memcpy(&v, &kVacantBits, sizeof v);
+  return v;
+}
+
+bool isVacant(double v) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &v, sizeof v);
+  return bits == kVacantBits;
+}
+
+namespace {
+
+/// A value in arithmetic: vacant reads as 0.
+double arith(double v) {
+  return isVacant(v) ? 0.0 : v;
+}
+
+/// EQ: two vacants are equal, a vacant and a number never.
+bool equal(double a, double b) {
+  if (isVacant(a) || isVacant(b)) return isVacant(a) && isVacant(b);
+  return std::abs(a - b) < kEqualTolerance;
+}
 
 std::string shown(char c) {
   if (c == 0) return "the end of the line";
@@ -125,11 +154,11 @@ class Parser {
     const char ch = peek();
     if (ch == '-') {
       ++p_;
-      return -real();
+      return -arith(real());
     }
     if (ch == '+') {
       ++p_;
-      return real();
+      return arith(real());
     }
     if (ch == '[') return bracket();
     if (ch == '#') return parameterValue();
@@ -151,49 +180,53 @@ class Parser {
     double left = expression(level - 1);
     for (;;) {
       const std::size_t opAt = p_;
+      if (level == 4 && accept("eq")) {
+        left = equal(left, expression(3)) ? 1.0 : 0.0;
+        continue;
+      }
+      if (level == 4 && accept("ne")) {
+        left = equal(left, expression(3)) ? 0.0 : 1.0;
+        continue;
+      }
       if (level == 1 && accept("**")) {
-        left = std::pow(left, expression(0));
+        left = std::pow(arith(left), arith(expression(0)));
       } else if (level == 2 && peek() == '*' && peek(1) != '*') {
         ++p_;
-        left *= expression(1);
+        left = arith(left) * arith(expression(1));
       } else if (level == 2 && peek() == '/') {
         ++p_;
-        const double right = expression(1);
+        const double right = arith(expression(1));
         if (right == 0.0) failAt(opAt, "expected a non-zero divisor, found division by zero");
-        left /= right;
+        left = arith(left) / right;
       } else if (level == 2 && accept("mod")) {
-        const double right = expression(1);
+        const double right = arith(expression(1));
         if (right == 0.0) failAt(opAt, "expected a non-zero divisor, found MOD by zero");
-        double m = std::fmod(left, right);
+        double m = std::fmod(arith(left), right);
         if (m < 0.0) m += std::abs(right);
         left = m;
       } else if (level == 3 && peek() == '+') {
         ++p_;
-        left += expression(2);
+        left = arith(left) + arith(expression(2));
       } else if (level == 3 && peek() == '-') {
         ++p_;
-        left -= expression(2);
-      } else if (level == 4 && accept("eq")) {
-        left = std::abs(left - expression(3)) < kEqualTolerance ? 1.0 : 0.0;
-      } else if (level == 4 && accept("ne")) {
-        left = std::abs(left - expression(3)) >= kEqualTolerance ? 1.0 : 0.0;
+        left = arith(left) - arith(expression(2));
       } else if (level == 4 && accept("gt")) {
-        left = left > expression(3) ? 1.0 : 0.0;
+        left = arith(left) > arith(expression(3)) ? 1.0 : 0.0;
       } else if (level == 4 && accept("ge")) {
-        left = left >= expression(3) ? 1.0 : 0.0;
+        left = arith(left) >= arith(expression(3)) ? 1.0 : 0.0;
       } else if (level == 4 && accept("lt")) {
-        left = left < expression(3) ? 1.0 : 0.0;
+        left = arith(left) < arith(expression(3)) ? 1.0 : 0.0;
       } else if (level == 4 && accept("le")) {
-        left = left <= expression(3) ? 1.0 : 0.0;
+        left = arith(left) <= arith(expression(3)) ? 1.0 : 0.0;
       } else if (level == 5 && accept("and")) {
-        const double right = expression(4);
-        left = (left != 0.0 && right != 0.0) ? 1.0 : 0.0;
+        const double right = arith(expression(4));
+        left = (arith(left) != 0.0 && right != 0.0) ? 1.0 : 0.0;
       } else if (level == 5 && accept("or")) {
-        const double right = expression(4);
-        left = (left != 0.0 || right != 0.0) ? 1.0 : 0.0;
+        const double right = arith(expression(4));
+        left = (arith(left) != 0.0 || right != 0.0) ? 1.0 : 0.0;
       } else if (level == 5 && accept("xor")) {
-        const double right = expression(4);
-        left = ((left != 0.0) != (right != 0.0)) ? 1.0 : 0.0;
+        const double right = arith(expression(4));
+        left = ((arith(left) != 0.0) != (right != 0.0)) ? 1.0 : 0.0;
       } else {
         return left;
       }
@@ -214,9 +247,9 @@ class Parser {
       return params_.named(n, unused) ? 1.0 : 0.0;
     }
     if (name == "atan") {
-      const double y = bracket();
+      const double y = arith(bracket());
       expect('/', "'/' in ATAN[y]/[x]");
-      const double x = bracket();
+      const double x = arith(bracket());
       return std::atan2(y, x) / kDegree;
     }
     static const char* const known[] = {"abs", "acos",  "asin", "cos", "exp",  "fix",
@@ -229,7 +262,7 @@ class Parser {
       failAt(start,
              "expected a number, [expression], #parameter or function, found '" + name + "'");
     }
-    const double v = bracket();
+    const double v = arith(bracket());
     auto domain = [&](bool ok, const char* what) {
       if (!ok)
         failAt(start,
@@ -275,7 +308,7 @@ class Parser {
   /// After '#': a numbered parameter index, read as a real value and rounded.
   int parameterNumber() {
     const std::size_t at = p_;
-    const double v = real();
+    const double v = arith(real());
     const double r = std::round(v);
     if (std::abs(v - r) > 1e-4)
       failAt(at, "expected an integer parameter number, found " + std::to_string(v));
@@ -375,6 +408,90 @@ bool isProgramNumber(const std::string& s, std::size_t p) {
   return true;
 }
 
+/// A loop number of DO or END: 1 to 3 on Fanuc and Haas controls; any whole number is read.
+double loopNumber(Parser& in, const char* what) {
+  if (!std::isdigit(static_cast<unsigned char>(in.peek())))
+    in.fail(std::string("a loop number after ") + what);
+  return in.number();
+}
+
+/// Reads the word after IF's condition or GOTO: a number, #parameter or [expression].
+double jumpTarget(Parser& in) {
+  if (in.atEnd()) in.fail("a line number after GOTO");
+  return in.real();
+}
+
+/// #n=value or #<name>=value at the parser's position into block.assignments.
+void readAssignment(Parser& in, Block& block, const ParameterSource& params) {
+  const int column = in.column();
+  in.setPos(in.pos() + 1);
+  Assignment a;
+  a.column = column;
+  if (in.peek() == '<') {
+    a.name = in.parameterName();
+  } else {
+    a.number = in.parameterNumber();
+    try {
+      params.numbered(a.number);  // range check before the line runs
+    } catch (const std::out_of_range& e) {
+      throw ParseFailure{column, e.what()};
+    }
+  }
+  in.expect('=', "'=' in a parameter assignment");
+  const std::size_t valueAt = in.pos();
+  // An expression without brackets, as Fanuc macro B writes it (#1=#1+1); LinuxCNC's bracketed
+  // and single values are among them.
+  a.value = in.expression(5);
+  if (!std::isfinite(a.value) && !isVacant(a.value))
+    in.failAt(valueAt, "expected a finite value, found " +
+                           std::string(std::isnan(a.value) ? "nan" : "an infinite one"));
+  block.assignments.push_back(std::move(a));
+}
+
+/// A macro B statement at the parser's position into block.macro; false when the line is not
+/// one (its position unchanged).
+bool readMacro(Parser& in, Block& block, const ParameterSource& params) {
+  MacroStatement& m = block.macro;
+  m.column = in.column();
+  const std::size_t start = in.pos();
+  if (in.accept("if[")) {
+    in.setPos(in.pos() - 1);
+    m.condition = in.bracket();
+    if (in.accept("goto")) {
+      m.kind = MacroStatement::IfGoto;
+      m.target = jumpTarget(in);
+    } else if (in.accept("then")) {
+      m.kind = MacroStatement::IfThen;
+      if (in.peek() != '#') in.fail("an assignment #i=value after THEN");
+      readAssignment(in, block, params);
+      if (m.condition == 0.0) block.assignments.clear();
+    } else {
+      in.fail("GOTO or THEN after IF's condition");
+    }
+  } else if (in.accept("while[")) {
+    in.setPos(in.pos() - 1);
+    m.kind = MacroStatement::While;
+    m.condition = in.bracket();
+    if (!in.accept("do")) in.fail("DO and a loop number after WHILE's condition");
+    m.target = loopNumber(in, "DO");
+  } else if (in.accept("goto")) {
+    m.kind = MacroStatement::Goto;
+    m.target = jumpTarget(in);
+  } else if (in.accept("do") && std::isdigit(static_cast<unsigned char>(in.peek()))) {
+    m.kind = MacroStatement::Do;
+    m.target = loopNumber(in, "DO");
+  } else if ((in.setPos(start), in.accept("end")) &&
+             std::isdigit(static_cast<unsigned char>(in.peek()))) {
+    m.kind = MacroStatement::End;
+    m.target = loopNumber(in, "END");
+  } else {
+    in.setPos(start);
+    return false;
+  }
+  if (!in.atEnd()) in.fail("the end of the macro statement");
+  return true;
+}
+
 }  // namespace
 
 Block parseLine(std::string_view line, const ParameterSource& params) {
@@ -394,6 +511,8 @@ Block parseLine(std::string_view line, const ParameterSource& params) {
   skipLineNumber(s, p);
   in.setPos(p);
   if (p < s.size() && s[p] == ':' && isProgramNumber(s, p)) return block;  // ":1001"
+
+  if (readMacro(in, block, params)) return block;
 
   if (in.peek() == 'o') {
     OWord& o = block.oword;
@@ -428,26 +547,7 @@ Block parseLine(std::string_view line, const ParameterSource& params) {
     const char letter = in.peek();
     const int column = in.column();
     if (letter == '#') {
-      in.setPos(in.pos() + 1);
-      Assignment a;
-      a.column = column;
-      if (in.peek() == '<') {
-        a.name = in.parameterName();
-      } else {
-        a.number = in.parameterNumber();
-        try {
-          params.numbered(a.number);  // range check before the line runs
-        } catch (const std::out_of_range& e) {
-          throw ParseFailure{column, e.what()};
-        }
-      }
-      in.expect('=', "'=' in a parameter assignment");
-      const std::size_t valueAt = in.pos();
-      a.value = in.real();
-      if (!std::isfinite(a.value))
-        in.failAt(valueAt, "expected a finite value, found " +
-                               std::string(std::isnan(a.value) ? "nan" : "an infinite one"));
-      block.assignments.push_back(std::move(a));
+      readAssignment(in, block, params);
       continue;
     }
     if (letter == ',') {  // a corner word: ",r15" or ",c8"
@@ -480,6 +580,7 @@ Block parseLine(std::string_view line, const ParameterSource& params) {
     w.column = column;
     const std::size_t valueAt = in.pos();
     w.value = in.real();
+    if (isVacant(w.value)) continue;  // a vacant variable's word is left out (Fanuc)
     if (!std::isfinite(w.value))
       in.failAt(valueAt, std::string("expected a finite value of ") + w.letter + ", found " +
                              (std::isnan(w.value) ? "nan" : "an infinite one"));
@@ -498,6 +599,56 @@ bool peekProgramNumber(std::string_view line, std::string& number) {
     const std::size_t first = s.find_first_not_of('0', p + 1);
     number = first == std::string::npos ? "0" : s.substr(first);
     return true;
+  } catch (const ParseFailure&) {
+    return false;
+  }
+}
+
+MacroStatement::Kind peekMacroLoop(std::string_view line, int& loop) {
+  try {
+    const Compact compact(line, nullptr);
+    const std::string& s = compact.text();
+    std::size_t p = wordsStart(s);
+    MacroStatement::Kind kind = MacroStatement::None;
+    if (s.compare(p, 6, "while[") == 0) {
+      // the loop number after the condition's last "do"
+      const std::size_t d = s.rfind("do");
+      if (d == std::string::npos || d < p) return MacroStatement::None;
+      p = d + 2;
+      kind = MacroStatement::While;
+    } else if (s.compare(p, 2, "do") == 0) {
+      p += 2;
+      kind = MacroStatement::Do;
+    } else if (s.compare(p, 3, "end") == 0) {
+      p += 3;
+      kind = MacroStatement::End;
+    } else {
+      return MacroStatement::None;
+    }
+    const std::size_t digits = p;
+    int n = 0;
+    while (p < s.size() && std::isdigit(static_cast<unsigned char>(s[p])) && p - digits < 6)
+      n = 10 * n + (s[p++] - '0');
+    if (p == digits || p != s.size()) return MacroStatement::None;
+    loop = n;
+    return kind;
+  } catch (const ParseFailure&) {
+    return MacroStatement::None;
+  }
+}
+
+bool peekLineNumber(std::string_view line, double& number) {
+  try {
+    const Compact compact(line, nullptr);
+    const std::string& s = compact.text();
+    std::size_t p = !s.empty() && s[0] == '/' ? 1 : 0;
+    if (p >= s.size() || s[p] != 'n') return false;
+    const std::size_t start = ++p;
+    while (p < s.size() && (std::isdigit(static_cast<unsigned char>(s[p])) || s[p] == '.'))
+      ++p;
+    if (p == start) return false;
+    const auto r = std::from_chars(s.data() + start, s.data() + p, number);
+    return r.ec == std::errc();
   } catch (const ParseFailure&) {
     return false;
   }

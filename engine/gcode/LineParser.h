@@ -8,7 +8,8 @@
 /// `( )` comments, `;` comments to the end of the line; `/` block delete at the start;
 /// numbers without exponents; `[expr]` with ** * / MOD + - EQ NE GT GE LT LE AND OR XOR,
 /// functions ABS ACOS ASIN ATAN[a]/[b] COS EXP FIX FUP ROUND LN SIN SQRT TAN EXISTS (angles in
-/// degrees); parameters #n, #[expr], #<name>; assignments #n=value, #<name>=value; O-words.
+/// degrees); parameters #n, #[expr], #<name>; assignments #n=value, #<name>=value; O-words;
+/// Fanuc/Haas macro statements (IF, WHILE, DO, END, GOTO).
 
 #include <optional>
 #include <string>
@@ -16,6 +17,12 @@
 #include <vector>
 
 namespace engage::gcode {
+
+/// Fanuc's vacant variable (#0, a local a G65 call gave no argument for): a NaN of its own, so
+/// that it passes through a bare reference (#2=#1 leaves #2 vacant; X#1 leaves X out) and reads
+/// as 0 in arithmetic and ordering, equal only to another vacant in EQ and NE.
+double vacantValue();
+bool isVacant(double v);
 
 /// Where a line parser reads and checks parameters.
 class ParameterSource {
@@ -62,6 +69,16 @@ struct CornerWord {
   int column = 0;
 };
 
+/// A Fanuc/Haas custom macro B statement: IF [c] GOTO n, IF [c] THEN #i=v, WHILE [c] DO m,
+/// DO m, END m, GOTO n. Read in every dialect; run by the Fanuc and Haas ones.
+struct MacroStatement {
+  enum Kind { None, IfGoto, IfThen, While, Do, End, Goto };
+  Kind kind = None;
+  double condition = 1.0;  ///< IF, WHILE: the bracket's value (0: false)
+  double target = 0.0;     ///< GOTO: the N number; WHILE .. DO, DO, END: the loop's number
+  int column = 0;
+};
+
 struct Block {
   bool blockDelete = false;  ///< the line starts with '/'
   bool percent = false;      ///< the line is a '%' program delimiter
@@ -70,6 +87,8 @@ struct Block {
   std::vector<Assignment> assignments;
   bool hasOWord = false;
   OWord oword;
+  /// IF [c] THEN keeps its assignments (in `assignments`) only where c holds.
+  MacroStatement macro;
   std::vector<std::string> comments;
 };
 
@@ -85,6 +104,13 @@ Block parseLine(std::string_view line, const ParameterSource& params);
 /// Only the O-word of a line, without evaluating anything (for indexing control flow);
 /// false when the line has none. Never throws.
 bool peekOWord(std::string_view line, std::string& label, std::string& keyword);
+
+/// A line's macro loop statement without evaluating anything (for matching WHILE/DO with END):
+/// kind While, Do or End and its loop number; None for any other line. Never throws.
+MacroStatement::Kind peekMacroLoop(std::string_view line, int& loop);
+
+/// A line's N number (after an optional '/'), for GOTO; false when it has none. Never throws.
+bool peekLineNumber(std::string_view line, double& number);
 
 /// A program number alone on its line ("O2000", "O0100 (POCKET)"), the label M98 P calls,
 /// as a number without leading zeros; false for any other line. Never throws.

@@ -11,8 +11,9 @@ namespace engage {
 Dialect dialectOf(const std::string& name) {
   if (name.empty() || name == "linuxcnc") return Dialect::LinuxCNC;
   if (name == "fanuc") return Dialect::Fanuc;
+  if (name == "haas") return Dialect::Haas;
   if (name == "grbl") return Dialect::Grbl;
-  throw ParameterError("--dialect: expected linuxcnc, fanuc or grbl, found '" + name + "'");
+  throw ParameterError("--dialect: expected linuxcnc, fanuc, haas or grbl, found '" + name + "'");
 }
 
 MachineSetup readMachine(const std::string& path) {

@@ -101,9 +101,11 @@ std::vector<OptionInfo> makeTable() {
       choice("startup-units", G::Simulation, {"mm", "in", "inch"}, "",
              "the machine's units at start-up, for a program that sets neither G20 nor G21 "
              "(default: the machine file's startup_units, else mm)"),
-      choice("dialect", G::Simulation, {"linuxcnc", "fanuc", "grbl"}, "linuxcnc",
-             "the controller the program is for: linuxcnc, fanuc (M98 P with the count in its "
-             "leading digits) or grbl (ignores an arc's off-plane centre word)"),
+      choice("dialect", G::Simulation, {"linuxcnc", "fanuc", "haas", "grbl"}, "linuxcnc",
+             "the controller the program is for: linuxcnc; fanuc (M98 P with the count in its "
+             "leading digits, G65 macro calls, IF/WHILE/GOTO, #0 vacant, system variables); "
+             "haas (fanuc's, with #10000-#10999 and M97 local subprograms); grbl (ignores an "
+             "arc's off-plane centre word)"),
       choice("cutter-comp", G::Simulation, {"control", "wear"}, "control",
              "what a G41/G42 D register holds: control (the tool's radius from --tools or "
              "--tool-table: the control offsets the part's outline) or wear (only the wear: the "

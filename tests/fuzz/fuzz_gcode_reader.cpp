@@ -17,8 +17,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   engage::ReaderOptions options;
   options.maxExecutedLines = 20000;  // loops in fuzzed programs end quickly
   options.maxMoves = 200000;         // and lathe cycles in them stay small
-  // The last byte picks the dialect (LinuxCNC, Fanuc, grbl): all three paths are fuzzed.
-  if (size > 0) options.dialect = static_cast<engage::Dialect>(data[size - 1] % 3);
+  // The last byte picks the dialect (LinuxCNC, Fanuc, Haas, grbl): all four paths are fuzzed.
+  if (size > 0) options.dialect = static_cast<engage::Dialect>(data[size - 1] % 4);
   try {
     (void)engage::readProgramText(text, "fuzz.ngc", options);
   } catch (const engage::Error&) {

@@ -683,8 +683,11 @@ TEST_CASE("a machine: G53, G28 and G30 where it puts them, its start, its travel
 TEST_CASE("what cannot be interpreted is reported with file:line:col", "[gcode]") {
   CHECK_THAT(errorOf("G12 X1\n"), Contains("test.ngc:1:1: expected a known G code, found G12"));
   CHECK_THAT(errorOf("M97 P100\n"),
-             Contains("test.ngc:1:1: expected an M code engage interprets, found M97 (Haas M97 "
-                      "local subprogram call"));
+             Contains("test.ngc:1:1: expected --dialect haas for M97 (a Haas local subprogram "
+                      "call), found the LinuxCNC dialect"));
+  CHECK_THAT(errorOf("M96 P100 Q1\n"),
+             Contains("test.ngc:1:1: expected an M code engage interprets, found M96 (Haas: a "
+                      "jump on an input"));
   CHECK_THAT(
       errorOf("G1 G2 X1 F1\n"),
       Contains("1:4: expected at most one G code of modal group 1 per line, found G1 and G2"));
@@ -874,4 +877,144 @@ TEST_CASE("a G41 restated while it is on: a no-op for Fanuc and Haas, refused by
   }
   // The offset path: the 20 x 20 square's left side, 3 mm inside it: (3, 17) after X20.
   checkPoint(plain[3].end, 17, 3, 0);
+}
+
+namespace {
+
+Toolpath runAs(Dialect dialect, const std::string& text) {
+  ReaderOptions o;
+  o.dialect = dialect;
+  return run(text, o);
+}
+
+std::string errorAs(Dialect dialect, const std::string& text) {
+  try {
+    runAs(dialect, text);
+  } catch (const GcodeError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("Fanuc and Haas custom macro B: G65 with arguments, IF, WHILE, GOTO, vacant",
+          "[gcode][macro]") {
+  {
+    INFO("a shop's bolt-circle macro (data/gcode/dialects/haas_macro_b.nc), holes by hand");
+    ReaderOptions o;
+    o.dialect = Dialect::Haas;
+    const Toolpath p = readProgram(ENGAGE_SOURCE_DIR "/data/gcode/dialects/haas_macro_b.nc", o);
+    // Each hole: a rapid over it, down to R, the plunge to Z, back to R. The plunges only:
+    std::vector<Eigen::Vector3d> plunges;
+    for (const Move& m : p.moves)
+      if (m.kind == MoveKind::Line) plunges.push_back(m.end);
+    REQUIRE(plunges.size() == 10);
+    // Six on r 20 about (40, 30) from 0 deg, 3 mm deep (A and R not given: 0 deg, R 2);
+    for (int i = 0; i < 6; ++i) {
+      const double a = i * kPi / 3.0;
+      checkPoint(plunges[static_cast<std::size_t>(i)], 40 + 20 * std::cos(a), 30 + 20 * std::sin(a),
+                 -3, 1e-9);
+    }
+    // four on r 15 about (100, 30) from 45 deg, 2 mm deep, at F150.
+    for (int i = 0; i < 4; ++i) {
+      const double a = kPi / 4.0 + i * kPi / 2.0;
+      checkPoint(plunges[static_cast<std::size_t>(6 + i)], 100 + 15 * std::cos(a),
+                 30 + 15 * std::sin(a), -2, 1e-9);
+    }
+    // The clearance R: 2 mm when not given (the macro's IF [#18 EQ #0] THEN), 5 when given.
+    CHECK(p.moves[3].end.z() == Approx(2.0).margin(kExact));
+    CHECK(p.moves.back().end.z() == Approx(25.0).margin(kExact));
+  }
+  const std::string macro = "O9001\n#30=#1+#2\nG1 X#30 Y#24 F100\n#1=99\nM99\n";
+  {
+    INFO("arguments into #1-#26 by letter; the caller's locals back after M99");
+    const auto m =
+        runAs(Dialect::Fanuc, "G21 G90\n#1=7\nG65 P9001 A1 B2 X3\nG0 Z#1\nM30\n" + macro).moves;
+    REQUIRE(m.size() == 2);
+    checkPoint(m[0].end, 3, 3, 0);  // X = A + B, Y = X's argument
+    checkPoint(m[1].end, 3, 3, 7);  // #1 is the caller's 7 again, not the macro's 99
+  }
+  {
+    INFO("L repeats: the arguments only on the first time (#1 is 99 from then on)");
+    const auto m = runAs(Dialect::Fanuc, "G21 G90\nG65 P9001 L2 A1 B2 X3\nM30\n" + macro).moves;
+    REQUIRE(m.size() == 2);
+    checkPoint(m[0].end, 3, 3, 0);
+    checkPoint(m[1].end, 101, 3, 0);
+  }
+  {
+    INFO("vacant: an argument not given, #0; 0 in arithmetic, a left-out word, EQ only to #0");
+    const auto m = runAs(Dialect::Fanuc,
+                         "G21 G90\nG0 X1 Y2 Z3\n#2=#0\n#3=#0+4\nG0 X#2 Y#3\n"
+                         "IF [#2 EQ 0] THEN #4=1\nIF [#2 EQ #0] THEN #5=1\nG0 Z[#4+10*#5]\nM30\n")
+                       .moves;
+    REQUIRE(m.size() == 3);
+    checkPoint(m[1].end, 1, 4, 3);   // X#2 left out; #3 = 0 + 4
+    checkPoint(m[2].end, 1, 4, 10);  // #4 vacant (0 in the sum), #5 = 1
+  }
+  {
+    INFO("WHILE .. DO nested, GOTO within the program it is in");
+    const auto m = runAs(Dialect::Fanuc,
+                         "G21 G90\n#1=0\nWHILE [#1 LT 2] DO 1\n#2=0\nWHILE [#2 LT 3] DO 2\n"
+                         "G0 X#1 Y#2\n#2=#2+1\nEND 2\n#1=#1+1\nEND 1\nGOTO 10\nG0 Z99\n"
+                         "N10 M98 P20\nM30\nO20\nGOTO 10\nG0 Z-99\nN10 G0 Z5\nM99\n")
+                       .moves;
+    REQUIRE(m.size() == 7);
+    checkPoint(m[5].end, 1, 2, 0);
+    checkPoint(m[6].end, 1, 2, 5);  // O20's own N10, not the main program's
+  }
+  {
+    INFO("Haas: #10000-#10999, legacy numbers aliased; M97 local subprograms");
+    const auto m = runAs(Dialect::Haas,
+                         "G21 G90\n#10100=5\n#10200=6\nG0 X#100 Y#10200\nM97 P100 L2\nM30\n"
+                         "N100 #101=#101+1\nG0 Z#10101\nM99\n")
+                       .moves;
+    REQUIRE(m.size() == 3);
+    checkPoint(m[0].end, 5, 6, 0);
+    checkPoint(m[2].end, 5, 6, 2);
+  }
+  {
+    INFO("system variables a program reads, in program units");
+    ReaderOptions o;
+    o.dialect = Dialect::Fanuc;
+    o.toolDiameters = {{3, 6.35}};
+    const auto m = run("G20 G90\nT3 M6\nG0 X1 Y2 Z3\n#1=#5041+#5022\nG0 X#1 Y#4006 Z#4120\n"
+                       "G0 X#2403 Y#4003 Z#4001\nM30\n",
+                       o)
+                       .moves;
+    REQUIRE(m.size() == 3);
+    checkPoint(m[1].end, 3 * 25.4, 20 * 25.4, 3 * 25.4);  // 1 + 2; G20; T3
+    checkPoint(m[2].end, 0.125 * 25.4, 90 * 25.4, 0);     // tool 3's radius; G90; G0
+  }
+  // What needs the machine, what cannot be set, and a program's own alarm: refused at the word.
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\nG0 X#3011\n"),
+             Contains("test.ngc:2:5: expected a variable a simulation can give, found #3011"));
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\n#1=#1000\n"), Contains("found #1000 (an input"));
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\n#5021=1\n"),
+             Contains("test.ngc:2:1: expected a variable a program can set, found #5021"));
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\n#3000=12 (CHECK TOOL)\nG0 X1\n"),
+             Contains("test.ngc:2:1: expected the program to go on, found alarm #3000 = 12 "
+                      "(CHECK TOOL)"));
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\nG65 P9001 G1 X2\nM30\n" + macro),
+             Contains("test.ngc:2:11: expected only G65 and its arguments on a macro call's "
+                      "line, found G1"));
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\nG65 P9001 A1 A2\nM30\n" + macro),
+             Contains("test.ngc:2:14: expected each argument once in G65"));
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\nG65 P9002\nM30\n"),
+             Contains("test.ngc:2:1: expected a macro program O9002"));
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\nWHILE [1] DO 1\nG0 X1\nEND 2\n"),
+             Contains("test.ngc:4:1: expected WHILE .. DO 2 or DO 2 opening this END"));
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\nWHILE [0] DO 1\nG0 X1\nM30\n"),
+             Contains("test.ngc:2:1: expected END 1 closing this loop, found none"));
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\nGOTO 5\n"),
+             Contains("test.ngc:2:1: expected a line N5 in this program to go to, found none"));
+  // LinuxCNC and Fanuc (without Haas) refuse what is not theirs, naming the dialect to give.
+  CHECK_THAT(errorOf("G21\n#1=1\nIF [#1 GT 0] GOTO 5\nN5 M30\n"),
+             Contains("test.ngc:3:1: expected --dialect fanuc or haas"));
+  CHECK_THAT(errorOf("G21\nG65 P9001 A1\nM30\n" + macro),
+             Contains("test.ngc:2:1: expected --dialect fanuc or haas for G65"));
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\nM97 P10\nM30\nN10 M99\n"),
+             Contains("expected --dialect haas for M97"));
+  CHECK_THAT(errorAs(Dialect::Fanuc, "G21\n#10000=1\n"),
+             Contains("expected a parameter number in 1..5602, found #10000"));
 }
