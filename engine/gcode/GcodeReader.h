@@ -32,6 +32,7 @@
 #include "engine/gcode/Toolpath.h"
 
 #include <cstddef>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -85,6 +86,13 @@ struct ReaderOptions {
   /// mm: the diameter G41/G42 take for every tool when neither toolTable nor toolDiameters
   /// gives any (the one --tool of a run without a tool library); 0: none known.
   double soleToolDiameter = 0.0;
+  /// Where a probing move G38.2/G38.3 from `from` to `to` (mm, the moves' frame) with tool
+  /// `tool` in the spindle first touches the stock: the fraction of the move, above 1 for no
+  /// contact. Set, the probe stops there and #5061-#5063 and #5070 say so as on the machine
+  /// (G38.2 without contact is an error); unset, it runs to its target and backs off 0.254 mm
+  /// as LinuxCNC's stand-alone rs274 does.
+  std::function<double(const Eigen::Vector3d& from, const Eigen::Vector3d& to, int tool)>
+      probeContact;
   /// Skip lines that start with '/' (the block delete switch); off as in LinuxCNC's default.
   bool blockDelete = false;
   /// Folders searched for o<name> call subroutine files (<name>.ngc); the program's own

@@ -242,6 +242,27 @@ void Interpreter::probe(const Words& w, int column) {
     fail(column,
          "expected a probe target away from the start point, found the start point "
          "itself");
+  if (options_.probeContact && distance > 0.0 && (motion_ == G_38_2 || motion_ == G_38_3)) {
+    // Towards the stock: the probe stops where it touches it.
+    const Vector3d frame = options_.machine ? options_.machine->workOffset : Vector3d::Zero();
+    const double t = options_.probeContact(start - frame, end - frame, tool_);
+    if (t <= 0.0)
+      fail(column, "expected the probe clear of the stock when " + name +
+                       " starts, found it touching (the control refuses a tripped probe)");
+    if (t > 1.0 && mustTouch)
+      fail(column,
+           "expected the probe to touch the stock on its way to the target, found no "
+           "contact (" +
+               name + " stops the program then)");
+    const Vector3d stop = t > 1.0 ? end : Vector3d(start + t * (end - start));
+    emitLinear(MoveKind::Line, stop, feedFor(distance, w, column));
+    out_.moves.back().feedSource = FeedSource::Probe;
+    const Vector3d program = (stop - workOffset()) / unit();
+    for (int a = 0; a < 3; ++a)
+      params_[5061 + static_cast<std::size_t>(a)] = program[a];
+    params_[5070] = t > 1.0 ? 0.0 : 1.0;
+    return;
+  }
   if (distance > 0.0) {
     const double feed = feedFor(distance, w, column);
     const double backoff = inch_ ? 0.01 * kInch : 0.254;  // mm

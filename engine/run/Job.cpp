@@ -3,6 +3,7 @@
 #include "engine/tools/CamoticsProject.h"
 
 #include "engine/run/Machine.h"
+#include "engine/run/ProbeContact.h"
 
 #include "cutters/Error.h"
 #include "engine/gcode/GcodeReader.h"
@@ -426,6 +427,29 @@ double soleToolDiameter(const OptionValues& values, UnitSystem sys) {
   }
 }
 
+/// Probing moves (G38.2, G38.3) stop where they touch the stock, as on the machine: the
+/// program is read again with the stock's box (a mesh's or stock.vdb's bounds: job.probesOnBounds)
+/// and the tools' radii, so that what the program does with #5061-#5063 (G10 L20 zeroing on
+/// the touched face) follows. Without a stock the probe runs to its target, as LinuxCNC's
+/// stand-alone rs274 has it.
+void probeAgainstStock(Job& job, const std::optional<CamoticsProject>& project) {
+  if (std::none_of(job.path.moves.begin(), job.path.moves.end(),
+                   [](const Move& m) { return m.feedSource == FeedSource::Probe; }))
+    return;
+  const std::optional<Box3> b = job.stock.box ? job.stock.box : stockFileBounds(job.stock);
+  if (!b) return;
+  ReaderOptions ro = job.reader;
+  ro.probeContact = [box = *b, cutters = job.cutters](const Eigen::Vector3d& from,
+                                                      const Eigen::Vector3d& to, int tool) {
+    const bool known = cutters.byTool.count(tool) || cutters.fallback;
+    return probeContact(box, known ? cutters.of(tool).radius() : 0.0, from, to);
+  };
+  job.path = project ? readPrograms(project->files, ro) : readProgram(job.program, ro);
+  job.reader = ro;
+  job.probesOnBounds = !job.stock.box;
+  dropWords(job);
+}
+
 /// Whether a program's first G20 or G21 (outside comments) says inches; nullopt when it has
 /// neither or cannot be read (the reader then says why).
 std::optional<bool> firstUnitsWord(const std::string& path) {
@@ -729,6 +753,7 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   so.physics = physicsOptions(values, sys);
   stockOptions(job, values, project, sys);
   startAboveStock(job, project.has_value());
+  probeAgainstStock(job, project);
   // The cell follows the narrowest engagement at the program's depths (Resolution.h).
   const std::string voxel = text("voxel");
   job.voxelGiven = !voxel.empty();

@@ -62,6 +62,8 @@ struct Job {
   /// first change (its first tool), 0 otherwise.
   int startTool = 0;
   CutterSet cutters;  ///< the cutter of every move's tool
+  /// Probing moves stopped on the bounds of a mesh or stock.vdb stock, not its surface.
+  bool probesOnBounds = false;
   StockSpec stock;
   StockModel stockModel = StockModel::Dexel;
   UnitSystem units = UnitSystem::Metric;  ///< of the reports (and of bare numbers)

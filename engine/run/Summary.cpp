@@ -513,6 +513,10 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
                   ": M codes engage does not know, taken as machine functions that move no axis "
                   "(a chip conveyor, a user M code's script); check them on the machine");
   }
+  if (job.probesOnBounds)
+    w.push_back(
+        "probing moves stopped on the bounding box of the stock file, not its surface "
+        "(give a box stock for exact contacts)");
   // Control compensation that offset nothing: the control would use its register.
   if (!job.path.unoffsetCompensation.empty()) {
     std::string lines;

@@ -1018,3 +1018,35 @@ TEST_CASE("Fanuc and Haas custom macro B: G65 with arguments, IF, WHILE, GOTO, v
   CHECK_THAT(errorAs(Dialect::Fanuc, "G21\n#10000=1\n"),
              Contains("expected a parameter number in 1..5602, found #10000"));
 }
+
+TEST_CASE("a probe stops where the simulated stock says it touches", "[gcode][probe]") {
+  // The stock's answer stands in for the box: the probe touches 22.3 of the 30 mm down.
+  ReaderOptions o;
+  o.probeContact = [](const Eigen::Vector3d& from, const Eigen::Vector3d& to, int) {
+    return from.z() > to.z() && to.z() < -2.3 ? (from.z() + 2.3) / (from.z() - to.z()) : 2.0;
+  };
+  const Toolpath p =
+      run("G21 G90\nG0 X10 Y10 Z20\nG38.2 Z-10 F100\nG10 L20 P1 Z0\nG1 Z-1 F200\n"
+          "G0 X#5061 Y#5062 Z[#5063+#5070]\nM2\n",
+          o);
+  REQUIRE(p.moves.size() == 4);
+  checkPoint(p.moves[1].end, 10, 10, -2.3);  // the probe stops at the top; no back-off
+  checkPoint(p.moves[2].end, 10, 10, -3.3);  // Z0 is the touched top: Z-1 is 1 mm into it
+  // #5061-#5063 the touch in the coordinates it was taken in (before G10: Z-2.3), #5070 = 1:
+  // Z-1.3 in the new coordinates, whose Z0 is at -2.3, is -3.6.
+  checkPoint(p.moves[3].end, 10, 10, -3.6);
+  {
+    INFO("G38.2 that touches nothing is an error; G38.3 goes to its target, #5070 = 0");
+    try {
+      run("G21 G90\nG0 X10 Y10 Z20\nG38.2 Z0 F100\nM2\n", o);
+      FAIL("G38.2 without contact ran");
+    } catch (const GcodeError& e) {
+      CHECK_THAT(std::string(e.what()),
+                 Contains("test.ngc:3:1: expected the probe to touch the stock on its way"));
+    }
+    const Toolpath q = run("G21 G90\nG0 X10 Y10 Z20\nG38.3 Z0 F100\nG0 X#5070\nM2\n", o);
+    REQUIRE(q.moves.size() == 3);
+    checkPoint(q.moves[1].end, 10, 10, 0);
+    checkPoint(q.moves[2].end, 0, 10, 0);
+  }
+}
