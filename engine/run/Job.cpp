@@ -450,6 +450,34 @@ void probeAgainstStock(Job& job, const std::optional<CamoticsProject>& project) 
   dropWords(job);
 }
 
+/// A tool no run can mean, refused before any work: narrower than the cell given (--voxel: no
+/// cell would see its cut), or wider than four times the stock's largest side (a face mill
+/// may be wider than a small part; a table read in the wrong units is 25.4 times off).
+void refuseAbsurdTools(const Job& job) {
+  const std::optional<Box3> b = job.stock.box ? job.stock.box : stockFileBounds(job.stock);
+  std::vector<std::pair<std::string, const AptCutter*>> tools;
+  for (const auto& [number, cutter] : job.cutters.byTool)
+    if (number != 0) tools.emplace_back("T" + std::to_string(number), &cutter);
+  if (job.cutters.fallback) tools.emplace_back("--tool", &*job.cutters.fallback);
+  for (const auto& [name, cutter] : tools) {
+    const double d = 2.0 * cutter->maxRadius();
+    if (job.voxelGiven && d < job.voxel)
+      throw ParameterError(name + " is " + formatNumber(d) +
+                           " mm across, narrower than the cell (" + formatNumber(job.voxel) +
+                           " mm): no cell would see its cut (give a --voxel a fifth of it or "
+                           "less, or check the tool table's units: --tool-table-units)");
+    if (b) {
+      const double side = std::max(b->max.x() - b->min.x(), b->max.y() - b->min.y());
+      if (d > 4.0 * side)
+        throw ParameterError(name + " is " + formatNumber(d) +
+                             " mm across, more than four times the stock's largest side (" +
+                             formatNumber(side) +
+                             " mm): is the tool table in other units than it was read in "
+                             "(--tool-table-units)?");
+    }
+  }
+}
+
 /// Whether a program's first G20 or G21 (outside comments) says inches; nullopt when it has
 /// neither or cannot be read (the reader then says why).
 std::optional<bool> firstUnitsWord(const std::string& path) {
@@ -766,6 +794,7 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
   job.voxel = job.voxelGiven ? parseQuantity(voxel, Dimension::Length, sys, "--voxel").value
                              : job.cellChoice.cell;
   if (!(job.voxel > 0.0)) throw ParameterError("--voxel must be positive");
+  refuseAbsurdTools(job);
   outputOptions(job, values);
   job.progressLabel = commandName(command);
   return job;

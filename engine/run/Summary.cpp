@@ -600,7 +600,7 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
     }
     if (tiny && !example.empty())
       w.push_back(
-          "the LinuxCNC tool table was read in mm (--tool-table-units mm, the default), "
+          "the LinuxCNC tool table was read in mm (--tool-table-units mm), "
           "and every tool this inch program loads is under 1 mm across (" +
           example + "): if the table is in inches, give --tool-table-units in");
   }
