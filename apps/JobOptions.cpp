@@ -83,7 +83,7 @@ void addJobOptions(CLI::App& cmd, OptionValues& values, JobCommand command) {
 
 void addReaderOptions(CLI::App& cmd, OptionValues& values) {
   for (const char* name : {"tool-table", "tool-table-units", "startup-units", "dialect", "machine",
-                           "block-delete", "cutter-comp", "max-moves"}) {
+                           "start", "block-delete", "cutter-comp", "max-moves"}) {
     const OptionInfo& o = *findJobOption(name);
     if (o.kind == OptionKind::Flag) {
       cmd.add_flag_callback(

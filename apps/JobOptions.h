@@ -21,7 +21,7 @@ void addJobOptions(CLI::App& cmd, OptionValues& values, JobCommand command);
 void addToolOptions(CLI::App& cmd, ToolOptions& options, bool required);
 
 /// Register the options that say how a program is read (readerOptions in Job.h: --dialect,
-/// --machine, --startup-units, --tool-table, --tool-table-units, --block-delete,
+/// --machine, --start, --startup-units, --tool-table, --tool-table-units, --block-delete,
 /// --cutter-comp, --max-moves), storing the typed text in `values`.
 void addReaderOptions(CLI::App& cmd, OptionValues& values);
 

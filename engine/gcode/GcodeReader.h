@@ -106,8 +106,9 @@ struct ReaderOptions {
   std::size_t maxMoves = 10'000'000;
   /// Where the tool tip starts (mm, the moves' frame) and the tool in the spindle. By
   /// default an assumption, the program origin with no tool (or the machine's start);
-  /// `startKnown` says it is where an earlier program left the machine (the next file of a
-  /// CAMotics project), so that a G43 before the first move shifts it as on the machine.
+  /// `startKnown` says it is where the machine is (an earlier program left it, the next file of
+  /// a CAMotics project; --start), so that a G43 before the first move shifts it as on the
+  /// machine.
   Eigen::Vector3d start{0.0, 0.0, 0.0};
   int startTool = 0;
   bool startKnown = false;

@@ -525,6 +525,23 @@ ReaderOptions readerOptions(const OptionValues& values, const std::string& progr
   const int maxMoves = wholeNumber(text("max-moves"), "--max-moves");
   if (maxMoves < 1) throw ParameterError("--max-moves must be positive");
   ro.maxMoves = static_cast<std::size_t>(maxMoves);
+  // --start: three lengths, bare numbers in the program's units (its first G20/G21).
+  if (const std::string start = text("start"); !start.empty()) {
+    const std::optional<bool> inch =
+        firstUnitsWord(isCamoticsProject(program) ? std::string() : program);
+    const UnitSystem sys = inch.value_or(ro.startInch) ? UnitSystem::Inch : UnitSystem::Metric;
+    std::vector<std::string> parts;
+    std::stringstream in(start);
+    for (std::string part; std::getline(in, part, ',');)
+      parts.push_back(part);
+    if (parts.size() != 3)
+      throw ParameterError("--start: expected X,Y,Z (three lengths), found '" + start + "'");
+    for (int a = 0; a < 3; ++a)
+      ro.start[a] =
+          parseQuantity(parts[static_cast<std::size_t>(a)], Dimension::Length, sys, "--start")
+              .value;
+    ro.startKnown = true;
+  }
   return ro;
 }
 

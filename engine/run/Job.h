@@ -115,7 +115,7 @@ struct Job {
 /// GcodeError, UnitError or ParameterError) naming the option and the value.
 Job makeJob(JobCommand command, const OptionValues& values);
 
-/// The G-code reader's options from a job's values (--dialect, --machine, --startup-units,
+/// The G-code reader's options from a job's values (--dialect, --machine, --start, --startup-units,
 /// --tool-table and --tool-table-units, --block-delete, --cutter-comp, --max-moves) for
 /// `program`: the one reading of them, for the jobs and for `engage moves`. A tool table's
 /// units default to the program's (its first G20/G21), else the start-up units.

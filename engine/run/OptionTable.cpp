@@ -113,6 +113,10 @@ std::vector<OptionInfo> makeTable() {
       plain("machine", K::Text, G::Simulation, "",
             "machine description (JSON: work offset, G28/G30, start position, travel) so that "
             "G53, G28 and G30 go where the machine puts them"),
+      plain("start", K::Text, G::Simulation, "",
+            "where the tool tip is when the program starts, X,Y,Z in the program's units "
+            "and coordinates (default: the --machine file's start, else the program's origin, "
+            "raised to the stock's top where that is above it)"),
       plain("block-delete", K::Flag, G::Simulation, "",
             "skip the lines that start with '/' (the controller's block delete switch on)"),
       plain("max-moves", K::Count, G::Simulation, "10000000",

@@ -256,3 +256,27 @@ TEST_CASE("a LinuxCNC tool table is read in the program's units", "[run]") {
   CHECK(makeJob(JobCommand::Simulate, b).cutters.byTool.at(1).radius() ==
         Approx(3.175).margin(1e-12));
 }
+
+TEST_CASE("--start: where the tool tip is when the program starts, in the program's units",
+          "[run]") {
+  test::TempFolder dir("job_start");
+  const std::string inch =
+      dir.write("p.ngc", "G20 G90\nG0 X1 Y1\nG1 Z-0.05 F10\nG1 X2\nM2\n");
+  OptionValues v = {{"program", inch},
+                    {"tool", "flat"},
+                    {"diameter", "0.25"},
+                    {"stock", "box:-1,-1,-1,3,2,0"},
+                    {"start", "0.5,0.25,2"}};
+  const Job job = makeJob(JobCommand::Simulate, v);
+  // Hand conversion: 0.5, 0.25, 2 in.
+  CHECK(job.reader.start.x() == Approx(12.7).margin(1e-12));
+  CHECK(job.reader.start.y() == Approx(6.35).margin(1e-12));
+  CHECK(job.reader.start.z() == Approx(50.8).margin(1e-12));
+  CHECK(job.reader.startKnown);
+  // The first rapid starts there (not at the origin raised to the stock's top).
+  REQUIRE(!job.path.moves.empty());
+  CHECK(job.path.moves.front().start.z() == Approx(50.8).margin(1e-12));
+  v["start"] = "1,2";
+  CHECK_THAT(errorOf(JobCommand::Simulate, v),
+             Catch::Matchers::Contains("--start: expected X,Y,Z (three lengths), found '1,2'"));
+}
