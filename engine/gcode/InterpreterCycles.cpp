@@ -11,8 +11,13 @@ void Interpreter::cycle(const Words& w, int column, bool explicitMotion) {
          "expected the XY plane (G17) for canned cycles, found " + std::string(planeName(plane_)));
   const bool newCycle = explicitMotion && (!cycleActive_ || motionBefore_ != motion_);
   if (newCycle) {
-    if (!w.has('R'))
-      fail(column, "expected an R word (retract plane) when a canned cycle starts, found none");
+    // Fanuc and Haas take a cycle without R as one whose R plane is the initial level.
+    if (!w.has('R') && fanucLike())
+      cycleR_ = incremental_ ? 0.0 : (pos_.z() - workOffset().z()) / unit();
+    else if (!w.has('R'))
+      fail(column,
+           "expected an R word (retract plane) when a canned cycle starts, found none "
+           "(--dialect fanuc or haas: the R plane at the initial level)");
     if (!w.has('Z'))
       fail(column, "expected a Z word (hole bottom) when a canned cycle starts, found none");
   }

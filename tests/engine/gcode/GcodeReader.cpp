@@ -1050,3 +1050,18 @@ TEST_CASE("a probe stops where the simulated stock says it touches", "[gcode][pr
     checkPoint(q.moves[2].end, 0, 10, 0);
   }
 }
+
+TEST_CASE("a Fanuc or Haas canned cycle without R drills from the initial level",
+          "[gcode][cycle]") {
+  // As Haas student programs write it: "G81 G98 Z-0.45 F85.95" from Z0.1. By hand: down to
+  // Z-0.45 at the feed from the initial level, back up to it (G98), in inches.
+  const std::string text = "G20 G90\nG0 X0.8 Y1.75 Z0.1\nG81 G98 Z-0.45 F85.95\nG80\nM30\n";
+  // (The cycle's rapids to the hole and to R have no length here: left out.)
+  const auto m = withoutZeroLength(runAs(Dialect::Haas, text).moves);
+  REQUIRE(m.size() == 3);
+  CHECK(m[1].kind == MoveKind::Line);
+  checkPoint(m[1].end, 0.8 * 25.4, 1.75 * 25.4, -0.45 * 25.4);
+  checkPoint(m[2].end, 0.8 * 25.4, 1.75 * 25.4, 0.1 * 25.4);
+  CHECK_THAT(errorOf(text), Contains("test.ngc:3:1: expected an R word (retract plane) when a "
+                                     "canned cycle starts, found none (--dialect fanuc or haas"));
+}

@@ -257,11 +257,9 @@ TEST_CASE("a LinuxCNC tool table is read in the program's units", "[run]") {
         Approx(3.175).margin(1e-12));
 }
 
-TEST_CASE("--start: where the tool tip is when the program starts, in the program's units",
-          "[run]") {
+TEST_CASE("the start position (--start): where the tool tip is when the program starts", "[run]") {
   test::TempFolder dir("job_start");
-  const std::string inch =
-      dir.write("p.ngc", "G20 G90\nG0 X1 Y1\nG1 Z-0.05 F10\nG1 X2\nM2\n");
+  const std::string inch = dir.write("p.ngc", "G20 G90\nG0 X1 Y1\nG1 Z-0.05 F10\nG1 X2\nM2\n");
   OptionValues v = {{"program", inch},
                     {"tool", "flat"},
                     {"diameter", "0.25"},
