@@ -3,6 +3,8 @@
 
 #include "engine/gcode/Interpreter.h"
 
+#include <limits>
+
 namespace engage::gcode {
 
 static std::vector<std::string> splitLines(const std::string& text) {
@@ -35,6 +37,23 @@ std::unique_ptr<SourceFile> makeSource(const std::string& name, const std::strin
       f->labels[label].emplace_back(static_cast<int>(i), "program");
   }
   return f;
+}
+
+const SourceFile::MacroIndex& SourceFile::macroIndex() const {
+  if (macroIndex_) return *macroIndex_;
+  auto ix = std::make_unique<MacroIndex>();
+  ix->lineNumbers.assign(lines.size(), std::numeric_limits<double>::quiet_NaN());
+  ix->loops.assign(lines.size(), {gcode::MacroStatement::None, 0});
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    gcode::peekLineNumber(lines[i], ix->lineNumbers[i]);
+    ix->loops[i].first = gcode::peekMacroLoop(lines[i], ix->loops[i].second);
+  }
+  for (const auto& [label, entries] : labels)  // (makeSource found the programs' O lines)
+    for (const auto& [line, keyword] : entries)
+      if (keyword == "program") ix->programStarts.push_back(line);
+  std::sort(ix->programStarts.begin(), ix->programStarts.end());
+  macroIndex_ = std::move(ix);
+  return *macroIndex_;
 }
 
 std::string readFile(const std::string& path) {
@@ -132,6 +151,11 @@ int haasLegacy(int n) {
   return mapped ? legacy : 0;
 }
 
+/// Fanuc's and Haas's timers and date (#3001-#3002, #3011-#3012, #3020-#3028).
+bool timerOrDate(int n) {
+  return (n >= 3001 && n <= 3002) || (n >= 3011 && n <= 3012) || (n >= 3020 && n <= 3028);
+}
+
 [[noreturn]] void needsMachine(int n, const char* what) {
   throw std::out_of_range("expected a variable a simulation can give, found #" + std::to_string(n) +
                           " (" + what + ": only the machine knows it)");
@@ -158,8 +182,7 @@ bool Interpreter::systemVariable(int n, double& value) const {
     }
     return true;
   }
-  if ((n >= 3001 && n <= 3002) || (n >= 3011 && n <= 3012) || (n >= 3020 && n <= 3028))
-    needsMachine(n, "a timer or the date");
+  if (timerOrDate(n)) needsMachine(n, "a timer or the date");
   if (n >= 4001 && n <= 4999) {
     // The modal state, as Fanuc numbers its groups (#4001 group 1, ...), and T, F, S.
     const double compensation = comp_.side() == CutterCompensation::Left    ? 41.0
@@ -451,8 +474,7 @@ void Interpreter::assign(const gcode::Assignment& a) {
     if (n >= 1000 && n <= 1999 && !(n >= 1100 && n <= 1155)) readOnly("an input or axis load");
     if (n >= 1100 && n <= 1155) return;  // an output: it moves nothing
     if (n >= 2001 && n <= 2800) readOnly("a tool offset: give it in the tool table");
-    if ((n >= 3001 && n <= 3002) || (n >= 3011 && n <= 3012) || (n >= 3020 && n <= 3028))
-      readOnly("a timer or the date");
+    if (timerOrDate(n)) readOnly("a timer or the date");
     if (n >= 4001 && n <= 4999) readOnly("the modal state");
     if (n >= 5001 && n <= 5160) readOnly("a position");
     if (n == 3003 || n == 3004 || n == 3006) return;  // single block, feed hold, stop: no motion
@@ -505,8 +527,7 @@ Interpreter::Words Interpreter::collect(const Block& b) {
       if (L == 'M' && code == M_97 && options_.dialect != Dialect::Haas)
         fail(word.column,
              "expected --dialect haas for M97 (a Haas local subprogram call), found the " +
-                 std::string(options_.dialect == Dialect::Fanuc ? "Fanuc" : "LinuxCNC") +
-                 " dialect");
+                 dialectName() + " dialect");
       auto& groups = L == 'G' ? gGroups : mGroups;
       const bool coolantPair = L == 'M' && group == 8 && (code == G_7 || code == G_8);
       auto it = groups.find(group);

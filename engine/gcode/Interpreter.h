@@ -55,6 +55,19 @@ struct SourceFile {
   std::vector<std::string> lines;
   /// label -> (line index, keyword), in line order.
   std::unordered_map<std::string, std::vector<std::pair<int, std::string>>> labels;
+  /// Fanuc/Haas macro B's index of the file, made by macroIndex() on the first GOTO, M97 or
+  /// loop that needs it: each line's N number (NaN where it has none) and loop statement
+  /// (WHILE .. DO m, DO m, END m: kind and m; None elsewhere), and the lines that open a
+  /// program (an O number), in order.
+  struct MacroIndex {
+    std::vector<double> lineNumbers;
+    std::vector<std::pair<gcode::MacroStatement::Kind, int>> loops;
+    std::vector<int> programStarts;
+  };
+  const MacroIndex& macroIndex() const;
+
+ private:
+  mutable std::unique_ptr<MacroIndex> macroIndex_;
 };
 
 /// A source file from its text: its lines and the O-word labels they open.
@@ -235,6 +248,19 @@ class Interpreter final : public gcode::ParameterSource {
   bool fanucLike() const {
     return options_.dialect == Dialect::Fanuc || options_.dialect == Dialect::Haas;
   }
+  /// "LinuxCNC", "Fanuc", "Haas" or "grbl", for messages.
+  std::string dialectName() const {
+    switch (options_.dialect) {
+      case Dialect::Fanuc:
+        return "Fanuc";
+      case Dialect::Haas:
+        return "Haas";
+      case Dialect::Grbl:
+        return "grbl";
+      default:
+        return "LinuxCNC";
+    }
+  }
   /// IF .. GOTO, IF .. THEN, WHILE .. DO, DO, END, GOTO at line_.
   void macroFlow(const Block& b);
   /// The line GOTO n jumps to: the line N<n> of the program (O number) it is in, searched
@@ -247,10 +273,6 @@ class Interpreter final : public gcode::ParameterSource {
   /// ordinary variable; throws std::out_of_range with the message for one that needs a
   /// machine.
   bool systemVariable(int n, double& value) const;
-  /// Where #n is stored: Haas's #10000-#10999 on their legacy numbers (#100-#199, #500-#699,
-  /// #800-#999) or in extendedVariables_; nullptr for a number outside every range.
-  double* variable(int n);
-  const double* variable(int n) const;
   /// Haas NGC variables without a legacy number (#10200-#10499, #10700-#10799).
   std::map<int, double> extendedVariables_;
 

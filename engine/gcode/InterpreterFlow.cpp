@@ -3,6 +3,8 @@
 
 #include "engine/gcode/Interpreter.h"
 
+#include <iterator>
+
 namespace engage::gcode {
 
 const std::vector<std::pair<int, std::string>>& Interpreter::labelEntries(const std::string& label,
@@ -232,20 +234,30 @@ void Interpreter::call(const gcode::OWord& o) {
   line_ = targetLine + 1;
 }
 
+namespace {
+
+/// A program number P or repeat count L of M97, M98 or G65: a whole number in 0..1e9; -1 when
+/// it is not.
+long wholeCount(double v) {
+  if (!(v >= 0.0) || std::abs(v - std::round(v)) > 1e-9 || v > 1e9) return -1;
+  return std::lround(v);
+}
+
+}  // namespace
+
 void Interpreter::subprogramCall(const Words& w) {
   const int column = w.mColumn(M_98);
   if (!w.has('P')) fail(column, "expected a P word (the program number) with M98, found none");
-  const double pv = w.get('P');
-  if (!(pv >= 0.0) || std::abs(pv - std::round(pv)) > 1e-9 || pv > 1e9)
-    fail(w.column('P'), "expected a program number P with M98, found P" + formatNumber(pv));
-  long program = std::lround(pv);
+  long program = wholeCount(w.get('P'));
+  if (program < 0)
+    fail(w.column('P'), "expected a program number P with M98, found P" + formatNumber(w.get('P')));
   long times = 1;
   if (w.has('L')) {
-    const double l = w.get('L');
-    if (!(l >= 0.0) || std::abs(l - std::round(l)) > 1e-9 || l > 1e9)
-      fail(w.column('L'), "expected a repeat count L with M98, found L" + formatNumber(l));
-    times = std::lround(l);
+    times = wholeCount(w.get('L'));
+    if (times < 0)
+      fail(w.column('L'), "expected a repeat count L with M98, found L" + formatNumber(w.get('L')));
   } else if (options_.dialect == Dialect::Fanuc && program > 9999) {
+    // (Haas numbers programs with five digits and counts with L only.)
     times = program / 10000;
     program %= 10000;
   }
@@ -274,22 +286,12 @@ Interpreter::Frame& Interpreter::enterSubprogram(int file, int line, long times,
   return frames_.back();
 }
 
-namespace {
-
-/// A repeat count L of M97, M98 or G65: a whole number in 0..1e9; -1 when it is not.
-long repeatCount(double l) {
-  if (!(l >= 0.0) || std::abs(l - std::round(l)) > 1e-9 || l > 1e9) return -1;
-  return std::lround(l);
-}
-
-}  // namespace
-
 void Interpreter::localSubprogramCall(const Words& w) {
   const int column = w.mColumn(M_97);
   if (!w.has('P')) fail(column, "expected a P word (the line number N) with M97, found none");
   long times = 1;
   if (w.has('L')) {
-    times = repeatCount(w.get('L'));
+    times = wholeCount(w.get('L'));
     if (times < 0)
       fail(w.column('L'), "expected a repeat count L with M97, found L" + formatNumber(w.get('L')));
   }
@@ -304,8 +306,7 @@ void Interpreter::macroCall(const Block& b) {
     if (word.letter == 'G' && codeOf(word.value) == G_65) column = word.column;
   if (!fanucLike())
     fail(column, "expected --dialect fanuc or haas for G65 (a Fanuc/Haas macro call), found the " +
-                     std::string(options_.dialect == Dialect::Grbl ? "grbl" : "LinuxCNC") +
-                     " dialect");
+                     dialectName() + " dialect");
   // Fanuc's argument specification I: the local each letter sets.
   static const std::map<char, int> local = {
       {'A', 1},  {'B', 2},  {'C', 3},  {'I', 4},  {'J', 5},  {'K', 6},  {'D', 7},
@@ -341,10 +342,10 @@ void Interpreter::macroCall(const Block& b) {
   }
   if (b.corner) fail(b.corner->column, "expected no corner word on a G65 line, found one");
   if (!program) fail(column, "expected a P word (the macro's program number) with G65, found none");
-  const long number = repeatCount(*program);
+  const long number = wholeCount(*program);
   if (number < 0)
     fail(column, "expected a program number P with G65, found P" + formatNumber(*program));
-  const long times = repeats ? repeatCount(*repeats) : 1;
+  const long times = repeats ? wholeCount(*repeats) : 1;
   if (times < 0)
     fail(column, "expected a repeat count L with G65, found L" + formatNumber(*repeats));
   if (times == 0) return;
@@ -387,8 +388,7 @@ void Interpreter::macroFlow(const Block& b) {
     fail(m.column,
          "expected --dialect fanuc or haas for Fanuc/Haas custom macro B (IF, WHILE, "
          "DO, END, GOTO), found the " +
-             std::string(options_.dialect == Dialect::Grbl ? "grbl" : "LinuxCNC") +
-             " dialect (its control flow is O-words)");
+             dialectName() + " dialect (its control flow is O-words)");
   using K = gcode::MacroStatement;
   switch (m.kind) {
     case K::IfGoto:
@@ -411,38 +411,27 @@ void Interpreter::macroFlow(const Block& b) {
 
 int Interpreter::lineNumbered(double n, int column) const {
   const SourceFile& f = *files_[static_cast<std::size_t>(file_)];
+  const SourceFile::MacroIndex& ix = f.macroIndex();
   const int count = static_cast<int>(f.lines.size());
   // The program (O number) the current line is in: from its O line to the next one.
-  std::string unused;
-  int first = 0, last = count;
-  for (int i = line_; i >= 0; --i)
-    if (gcode::peekProgramNumber(f.lines[static_cast<std::size_t>(i)], unused)) {
-      first = i;
-      break;
-    }
-  for (int i = line_ + 1; i < count; ++i)
-    if (gcode::peekProgramNumber(f.lines[static_cast<std::size_t>(i)], unused)) {
-      last = i;
-      break;
-    }
-  double number = 0.0;
+  const auto next = std::upper_bound(ix.programStarts.begin(), ix.programStarts.end(), line_);
+  const int first = next == ix.programStarts.begin() ? 0 : *std::prev(next);
+  const int last = next == ix.programStarts.end() ? count : *next;
   for (int pass = 0; pass < 2; ++pass)
     for (int i = pass == 0 ? line_ + 1 : first; i < (pass == 0 ? last : line_ + 1); ++i)
-      if (gcode::peekLineNumber(f.lines[static_cast<std::size_t>(i)], number) &&
-          std::abs(number - n) < 1e-9)
-        return i;
+      if (std::abs(ix.lineNumbers[static_cast<std::size_t>(i)] - n) < 1e-9) return i;
   fail(column, "expected a line N" + formatNumber(n) + " in this program to go to, found none");
 }
 
 int Interpreter::loopPartner(const gcode::MacroStatement& m, int column) const {
   const SourceFile& f = *files_[static_cast<std::size_t>(file_)];
+  const auto& loops = f.macroIndex().loops;
   const int loop = static_cast<int>(std::lround(m.target));
   const bool forward = m.kind != gcode::MacroStatement::End;
   int depth = 0;
   for (int i = forward ? line_ + 1 : line_ - 1;
-       forward ? i < static_cast<int>(f.lines.size()) : i >= 0; i += forward ? 1 : -1) {
-    int other = 0;
-    const auto kind = gcode::peekMacroLoop(f.lines[static_cast<std::size_t>(i)], other);
+       forward ? i < static_cast<int>(loops.size()) : i >= 0; i += forward ? 1 : -1) {
+    const auto [kind, other] = loops[static_cast<std::size_t>(i)];
     if (kind == gcode::MacroStatement::None || other != loop) continue;
     const bool opens = kind != gcode::MacroStatement::End;
     if (opens == forward) {

@@ -641,13 +641,11 @@ bool peekLineNumber(std::string_view line, double& number) {
   try {
     const Compact compact(line, nullptr);
     const std::string& s = compact.text();
-    std::size_t p = !s.empty() && s[0] == '/' ? 1 : 0;
-    if (p >= s.size() || s[p] != 'n') return false;
-    const std::size_t start = ++p;
-    while (p < s.size() && (std::isdigit(static_cast<unsigned char>(s[p])) || s[p] == '.'))
-      ++p;
-    if (p == start) return false;
-    const auto r = std::from_chars(s.data() + start, s.data() + p, number);
+    const std::size_t n = !s.empty() && s[0] == '/' ? 1 : 0;
+    std::size_t end = n;
+    skipLineNumber(s, end);
+    if (end == n) return false;
+    const auto r = std::from_chars(s.data() + n + 1, s.data() + end, number);
     return r.ec == std::errc();
   } catch (const ParseFailure&) {
     return false;

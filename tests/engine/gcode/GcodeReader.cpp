@@ -38,9 +38,9 @@ void checkPoint(const Eigen::Vector3d& p, double x, double y, double z, double t
 }
 
 /// Message of the GcodeError a program throws ("" when it does not throw).
-std::string errorOf(const std::string& text) {
+std::string errorOf(const std::string& text, const ReaderOptions& options = {}) {
   try {
-    run(text);
+    run(text, options);
   } catch (const GcodeError& e) {
     return e.what();
   }
@@ -570,14 +570,9 @@ TEST_CASE("compensation by wear, D0, and the run's one tool", "[gcode][comp]") {
     INFO("control: the same program offset by the tool's radius cannot enter, and says why");
     ReaderOptions o;
     o.toolDiameters = {{1, 12.7}};
-    try {
-      run(program, o);
-      FAIL("read as control compensation, the 0.01 in entry was taken");
-    } catch (const GcodeError& e) {
-      CHECK_THAT(e.what(), Contains("test.ngc:3:8: length of cutter compensation entry move is "
-                                    "not greater than the tool radius") &&
-                               Contains("give --cutter-comp wear"));
-    }
+    CHECK_THAT(errorOf(program, o), Contains("test.ngc:3:8: length of cutter compensation entry "
+                                             "move is not greater than the tool radius") &&
+                                        Contains("give --cutter-comp wear"));
   }
   {
     INFO("D0 offsets by nothing (LinuxCNC's rs274 agrees) and is named");
@@ -888,12 +883,9 @@ Toolpath runAs(Dialect dialect, const std::string& text) {
 }
 
 std::string errorAs(Dialect dialect, const std::string& text) {
-  try {
-    runAs(dialect, text);
-  } catch (const GcodeError& e) {
-    return e.what();
-  }
-  return "";
+  ReaderOptions o;
+  o.dialect = dialect;
+  return errorOf(text, o);
 }
 
 }  // namespace
@@ -1037,13 +1029,8 @@ TEST_CASE("a probe stops where the simulated stock says it touches", "[gcode][pr
   checkPoint(p.moves[3].end, 10, 10, -3.6);
   {
     INFO("G38.2 that touches nothing is an error; G38.3 goes to its target, #5070 = 0");
-    try {
-      run("G21 G90\nG0 X10 Y10 Z20\nG38.2 Z0 F100\nM2\n", o);
-      FAIL("G38.2 without contact ran");
-    } catch (const GcodeError& e) {
-      CHECK_THAT(std::string(e.what()),
-                 Contains("test.ngc:3:1: expected the probe to touch the stock on its way"));
-    }
+    CHECK_THAT(errorOf("G21 G90\nG0 X10 Y10 Z20\nG38.2 Z0 F100\nM2\n", o),
+               Contains("test.ngc:3:1: expected the probe to touch the stock on its way"));
     const Toolpath q = run("G21 G90\nG0 X10 Y10 Z20\nG38.3 Z0 F100\nG0 X#5070\nM2\n", o);
     REQUIRE(q.moves.size() == 3);
     checkPoint(q.moves[1].end, 10, 10, 0);
