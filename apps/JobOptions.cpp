@@ -62,22 +62,28 @@ CLI::Option* addOption(CLI::App& cmd, const OptionInfo& o, std::string& target) 
   return opt;
 }
 
+/// A table entry on `cmd`, its text into values[o.name] (its default first; a flag "true"
+/// when given). nullptr for a flag.
+CLI::Option* addValue(CLI::App& cmd, const OptionInfo& o, OptionValues& values) {
+  if (o.kind == OptionKind::Flag) {
+    const std::string name = o.name;
+    cmd.add_flag_callback(
+        "--" + name, [&values, name] { values[name] = "true"; }, o.help);
+    return nullptr;
+  }
+  std::string& target = values[o.name];
+  target = o.defaultText;
+  return addOption(cmd, o, target);
+}
+
 }  // namespace
 
 void addJobOptions(CLI::App& cmd, OptionValues& values, JobCommand command) {
   cmd.add_option("program", values["program"], "G-code program")->required();
   for (const OptionInfo& o : jobOptions()) {
     if (!appliesTo(o, command)) continue;
-    if (o.kind == OptionKind::Flag) {
-      const std::string name = o.name;
-      cmd.add_flag_callback(
-          "--" + name, [&values, name] { values[name] = "true"; }, o.help);
-      continue;
-    }
-    std::string& target = values[o.name];
-    target = o.defaultText;
-    CLI::Option* opt = addOption(cmd, o, target);
-    if (o.required) opt->required();
+    CLI::Option* opt = addValue(cmd, o, values);
+    if (opt && o.required) opt->required();
   }
 }
 
@@ -85,16 +91,9 @@ void addReaderOptions(CLI::App& cmd, OptionValues& values) {
   for (const char* name : {"tool-table", "tool-table-units", "startup-units", "dialect", "machine",
                            "start", "block-delete", "cutter-comp", "max-moves"}) {
     const OptionInfo& o = *findJobOption(name);
-    if (o.kind == OptionKind::Flag) {
-      cmd.add_flag_callback(
-          "--" + o.name, [&values, name] { values[name] = "true"; }, o.help);
-      continue;
-    }
-    std::string& target = values[o.name];
-    target = o.defaultText;
-    CLI::Option* opt = addOption(cmd, o, target);
+    CLI::Option* opt = addValue(cmd, o, values);
     // moves reads the program without makeJob: CLI11 checks the choices there.
-    if (o.kind == OptionKind::Choice) opt->check(CLI::IsMember(o.choices).description(""));
+    if (opt && o.kind == OptionKind::Choice) opt->check(CLI::IsMember(o.choices).description(""));
   }
 }
 
