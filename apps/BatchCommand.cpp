@@ -15,9 +15,14 @@ int runBatchCommand(const BatchOptions& o) {
     std::fprintf(stderr, "engage: %s\n", f.c_str());
   for (const std::string& c : report.collisions)
     std::fprintf(stderr, "engage: %s\n", c.c_str());
+  for (const std::string& g : report.gouges)
+    std::fprintf(stderr, "engage: %s\n", g.c_str());
   // 4: the batch ran, some jobs failed (their records hold the errors); not a crash (3).
-  // 5: all ran, and some met material with what must not cut (as simulate's 5).
-  return !report.failures.empty() ? 4 : report.collisions.empty() ? 0 : 5;
+  // 5: all ran, and some met material with what must not cut (as simulate's 5); 7: all ran,
+  // and some gouged their --part (as simulate's 7).
+  if (!report.failures.empty()) return 4;
+  if (!report.collisions.empty()) return 5;
+  return report.gouges.empty() ? 0 : 7;
 }
 
 }  // namespace

@@ -13,8 +13,10 @@ namespace {
 int runSimulate(JobCommand command, const OptionValues& values) {
   const CompletedRun run = runIntoFolder(makeJob(command, values));
   std::fputs(runReport(run.result, run.written).c_str(), stdout);
-  // 5: the run is complete and written, but a rapid, a shank or a holder met material.
-  return run.result.sim.collisions.empty() ? 0 : 5;
+  // 5: the run is complete and written, but a rapid, a shank or a holder met material;
+  // 7: likewise, but the stock is gouged deeper than --tolerance into the --part.
+  if (!run.result.sim.collisions.empty()) return 5;
+  return run.result.part.gouges.empty() ? 0 : 7;
 }
 
 void addCommand(CLI::App& app, std::function<int()>& run, JobCommand command, const char* help) {

@@ -4,6 +4,8 @@
 /// 0 success, 1 invalid input (a parameter, a unit, a file), 2 command-line usage,
 /// 3 internal error, 4 a batch ran but some of its jobs failed (their records hold the errors),
 /// 5 a simulate, schedule or batch run completed but a rapid, a shank or a holder met material,
+/// 6 a schedule's limit cannot be met, 7 a simulate, schedule or batch run completed but gouged
+/// its --part deeper than --tolerance (5 where both),
 /// 130 interrupted (SIGINT or SIGTERM: the run stops at its next step and removes what it made,
 /// as a failed run does; a second signal ends the process at once).
 
@@ -94,7 +96,8 @@ constexpr const char* kExitStatuses =
     "Exit status: 0 success; 1 invalid input (one line on stderr, nothing written); 2 usage; "
     "3 internal error; 4 a batch ran but some of its jobs failed; 5 the run completed but a "
     "rapid, a shank or a holder met material; 6 a schedule's limit cannot be met at the lowest "
-    "feed (nothing written); 130 interrupted.\n";
+    "feed (nothing written); 7 the run completed but gouged its --part deeper than --tolerance "
+    "(5 where both); 130 interrupted.\n";
 
 }  // namespace
 

@@ -49,9 +49,13 @@ inline std::uint64_t leafKey(const Coord& origin) {
   return part(origin.x()) | part(origin.y()) << 21 | part(origin.z()) << 42;
 }
 
-/// The 0.5 iso-surface of a fraction grid as a triangle mesh with outward normals; OpenVDB's
-/// `adaptivity` (0: none) merges cells where the surface is nearly flat.
-TriangleMesh isoSurface(const FloatGrid& grid, double adaptivity);
+/// The `isovalue` surface of a grid (0.5 of a fraction grid, 0 of a level set) as a triangle
+/// mesh with outward normals; OpenVDB's `adaptivity` (0: none) merges cells where the surface
+/// is nearly flat.
+TriangleMesh isoSurface(const FloatGrid& grid, double adaptivity, double isovalue = 0.5);
+
+/// Write grids to a .vdb through PATH.part, checked at every stage, renamed when complete.
+void writeVdb(const std::string& path, const openvdb::GridPtrVec& grids);
 
 /// The stock's surface as a narrow-band level set (negative inside, within `halfWidth` voxels
 /// of it) of the fractions' 0.5 iso-surface, from the surface's mesh points (VoxelSurface.cpp).

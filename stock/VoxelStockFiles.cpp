@@ -60,10 +60,6 @@ class CheckedArchive : public openvdb::io::Archive {
   }
 };
 
-void writeVdb(const std::string& path, const openvdb::GridPtrVec& grids) {
-  writeFileAtomically(path, [&](std::ostream& os) { CheckedArchive().writeTo(os, grids); });
-}
-
 /// How a dexel stock's columns lie on voxel columns of the same spacing h: dexel column (i, j)
 /// covers [x0 + i h, x0 + (i + 1) h] (and likewise in y), voxel c covers [(c - 1/2) h,
 /// (c + 1/2) h], so each dexel column overlaps four voxel columns and each voxel column
@@ -435,6 +431,14 @@ FloatGrid::Ptr resampledFractions(const StockFile& file, double h) {
 }
 
 }  // namespace
+
+namespace voxel {
+
+void writeVdb(const std::string& path, const openvdb::GridPtrVec& grids) {
+  writeFileAtomically(path, [&](std::ostream& os) { CheckedArchive().writeTo(os, grids); });
+}
+
+}  // namespace voxel
 
 VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
   initVdb();

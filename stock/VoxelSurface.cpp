@@ -52,11 +52,11 @@ namespace voxel {
 
 /// The 0.5 iso-surface of a fraction grid as a triangle mesh with outward normals; OpenVDB's
 /// `adaptivity` (0: none) merges cells where the surface is nearly flat.
-TriangleMesh isoSurface(const FloatGrid& grid, double adaptivity) {
+TriangleMesh isoSurface(const FloatGrid& grid, double adaptivity, double isovalue) {
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(grid, points, triangles, quads, 0.5, adaptivity);
+  openvdb::tools::volumeToMesh(grid, points, triangles, quads, isovalue, adaptivity);
   for (const auto& q : quads) {
     triangles.emplace_back(q[0], q[1], q[2]);
     triangles.emplace_back(q[0], q[2], q[3]);

@@ -98,7 +98,7 @@ class PointBins {
 std::vector<int> lastCuttingSteps(const std::vector<std::array<float, 3>>& points,
                                   const Toolpath& path, const std::vector<StepRecord>& steps,
                                   const CutterSet& cutters, double resolution, double tolerance,
-                                  double minRemoved) {
+                                  double minRemoved, bool orInside) {
   std::vector<std::atomic<int>> best(points.size());
   for (auto& b : best)
     b.store(-1, std::memory_order_relaxed);
@@ -128,7 +128,8 @@ std::vector<int> lastCuttingSteps(const std::vector<std::array<float, 3>>& point
               const Eigen::Vector3d p(q[0], q[1], q[2]);
               if ((p.array() < box.min.array()).any() || (p.array() > box.max.array()).any())
                 return;
-              if (std::abs(sweep.signedDistance(p)) > tolerance) return;
+              const double d = sweep.signedDistance(p);
+              if (d > tolerance || (!orInside && d < -tolerance)) return;
               int seen = best[k].load(std::memory_order_relaxed);
               while (seen < step && !best[k].compare_exchange_weak(seen, step)) {
               }

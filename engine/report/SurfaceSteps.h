@@ -15,11 +15,12 @@ namespace engage {
 
 /// Per point, the index of the last step (of `steps`, swept with `cutters` along `path` at
 /// sampling `resolution`, mm) that removed more than `minRemoved` mm^3 and whose swept
-/// surface lies within `tolerance` mm of it; -1 where none does (faces never cut). The same
-/// whatever the thread count (the largest index wins).
+/// surface lies within `tolerance` mm of it (with `orInside`, or whose swept solid holds it);
+/// -1 where none does (faces never cut). The same whatever the thread count (the largest
+/// index wins).
 std::vector<int> lastCuttingSteps(const std::vector<std::array<float, 3>>& points,
                                   const Toolpath& path, const std::vector<StepRecord>& steps,
                                   const CutterSet& cutters, double resolution, double tolerance,
-                                  double minRemoved);
+                                  double minRemoved, bool orInside = false);
 
 }  // namespace engage

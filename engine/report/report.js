@@ -268,6 +268,10 @@
     if (S.collisions)
       cards.appendChild(card('Collisions', num('collisions.count'),
                              S.collisions.count ? 'shank, holder or rapid met material' : 'none'));
+    if (S.part)
+      cards.appendChild(card('Gouges in the part', num('part.gouges.count'),
+                             el('span', null, 'deepest ', num('part.gouges.deepest', U.length), '; leftovers ',
+                                num('part.leftovers.count'), ', thickest ', num('part.leftovers.thickest', U.length))));
     var s = section('Summary');
     s.appendChild(cards);
 
@@ -296,6 +300,37 @@
                                 return [(c.file ? c.file.split('/').pop() + ':' : '') + c.line, 'T' + c.tool, c.part,
                                         c.first_step + '–' + c.last_step, num(p + 'volume', U.volume)];
                               })));
+    }
+    if (S.part) {
+      // The final stock against the part: the regions beyond the tolerance and the allowance.
+      var ps = section('The part: ' + S.part.file.split('/').pop(), 'part');
+      ps.appendChild(el('p', {class: 'note'}, num('part.gouges.count'), ' gouge(s) deeper than ',
+                        num('part.tolerance', U.length), ' (deepest ', num('part.gouges.deepest', U.length), '), ',
+                        num('part.leftovers.count'), ' leftover(s) thicker than ', num('part.allowance', U.length),
+                        ' (thickest ', num('part.leftovers.thickest', U.length), '); the deviation read along the part\'s normal at ',
+                        num('part.samples'), ' samples of ', num('part.sample_size', U.length),
+                        '. The 3D view below colours the stock by it: blue where the part\'s material is gone, red where material is left.'));
+      var where = function (r) { return r.at.map(fmt).join(', '); };
+      if (S.part.gouges.regions.length)
+        ps.appendChild(tableOf(['gouge', 'depth', 'area', 'volume', 'at', 'cut by (the floor\'s area each cut)'],
+                               S.part.gouges.regions.map(function (r, i) {
+                                 var p = 'part.gouges.regions.' + i + '.';
+                                 var lines = el('span');
+                                 r.lines.forEach(function (l, k) {
+                                   var text = (data.part_lines || {})[(data.sources || []).indexOf(l.file) + ':' + l.line] || '';
+                                   lines.appendChild(el('div', null, el('b', {text: l.file.split('/').pop() + ':' + l.line}),
+                                                        ' ', el('code', {text: text}), ' (', num(p + 'lines.' + k + '.floor_area', U.area), ')'));
+                                 });
+                                 return [String(i + 1), num(p + 'depth', U.length), num(p + 'area', U.area),
+                                         num(p + 'volume', U.volume), where(r), lines];
+                               })));
+      if (S.part.leftovers.regions.length)
+        ps.appendChild(tableOf(['leftover', 'thickness', 'area', 'volume', 'at'],
+                               S.part.leftovers.regions.slice(0, 20).map(function (r, i) {
+                                 var p = 'part.leftovers.regions.' + i + '.';
+                                 return [String(i + 1), num(p + 'thickness', U.length), num(p + 'area', U.area),
+                                         num(p + 'volume', U.volume), where(r)];
+                               })));
     }
     if (S.schedule) {
       var sc = section('Schedule: what bound the feed, line by line', 'schedule');
@@ -550,6 +585,9 @@
     var modes = [['mrr', 'MRR (' + U.mrr + ')'], ['mrr_scheduled', 'scheduled MRR (' + U.mrr + ')'],
                  ['f_peak', 'peak force (' + U.force + ')'], ['tool', 'tool'], ['step', 'step']];
     modes = modes.filter(function (m) { return tab[m[0]] !== undefined; });
+    // With --part: the stock's distance from the part at each vertex, first.
+    var deviation = surf.deviation ? b64(surf.deviation, Float32Array) : null;
+    if (deviation) modes.unshift(['deviation', 'deviation from the part (' + U.length + ')']);
     var select = el('select', {id: 'colour-by'});
     modes.forEach(function (m) { select.appendChild(el('option', {value: m[0]}, m[1])); });
     var pathBox = el('input', {type: 'checkbox', id: 'show-path'});
@@ -566,7 +604,24 @@
     }
     var palette = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b', '#e377c2', '#7f7f7f', '#bcbd22', '#17becf'];
     function hex(c) { var v = parseInt(c.slice(1), 16); return [(v >> 16 & 255) / 255, (v >> 8 & 255) / 255, (v & 255) / 255]; }
+    // Diverging: blue (the part's material gone) through white to red (material left), at
+    // +-range: five times the larger of the tolerance and the allowance.
+    function paintDeviation() {
+      var range = surf.deviation_range;
+      var blue = [0.15, 0.3, 0.75], white = [0.96, 0.96, 0.96], red = [0.8, 0.15, 0.12];
+      for (var i = 0; i < deviation.length; ++i) {
+        var t = Math.max(-1, Math.min(1, deviation[i] / range)), e = t < 0 ? blue : red, f = Math.abs(t);
+        for (var k = 0; k < 3; ++k) colors[3 * i + k] = white[k] + f * (e[k] - white[k]);
+      }
+      geom.attributes.color.needsUpdate = true;
+      colorbar.innerHTML = '';
+      colorbar.appendChild(el('span', null, fmt(-range) + ' (gouge)'));
+      colorbar.appendChild(el('span', {class: 'bar', style: 'background: linear-gradient(to right,rgb(38,77,191),rgb(245,245,245),rgb(204,38,31))'}));
+      colorbar.appendChild(el('span', null, fmt(range) + ' (left)'));
+      render();
+    }
     function paint(mode) {
+      if (mode === 'deviation') return paintDeviation();
       var vals = tab[mode], lo = Infinity, hi = -Infinity, tools = {};
       vals.forEach(function (v) {
         if (v === null) return;

@@ -185,8 +185,8 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     const double peak = cut ? sim.steps[out.peakStep].mrr : 0.0;
     const int peakLine = cut ? sim.steps[out.peakStep].line : 0;
     // "collision": the job ran and wrote its files, but a rapid, a shank or a holder met
-    // material (the status a run alone exits 5 with).
-    r["status"] = sim.collisions.empty() ? "ok" : "collision";
+    // material (the status a run alone exits 5 with); "gouge": it gouged its --part (7).
+    r["status"] = !sim.collisions.empty() ? "collision" : out.part.gouges.empty() ? "ok" : "gouge";
     r["error"] = nullptr;
     r["moves"] = out.job.path.moves.size();
     r["steps"] = sim.steps.size();
@@ -195,6 +195,7 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     r["peak_mrr_line"] = peakLine;
     r["cutting_time_s"] = sim.cuttingTime;
     r["collisions"] = sim.collisions.size();
+    r["gouges"] = out.part.done ? ordered_json(out.part.gouges.size()) : ordered_json();
     const bool scheduled = out.job.scheduling();
     r["feed_time_before_s"] = scheduled ? ordered_json(out.plan.timeBefore) : ordered_json();
     r["feed_time_after_s"] = scheduled ? ordered_json(out.plan.timeAfter) : ordered_json();
@@ -211,7 +212,7 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     r["error"] = e.what();
     for (const char* key :
          {"moves", "steps", "removed_mm3", "peak_mrr_mm3_min", "peak_mrr_line", "cutting_time_s",
-          "collisions", "feed_time_before_s", "feed_time_after_s", "saving_relative"})
+          "collisions", "gouges", "feed_time_before_s", "feed_time_after_s", "saving_relative"})
       r[key] = nullptr;
     r["warnings"] = ordered_json::array();
     // A failed job keeps nothing but its record.
@@ -320,9 +321,9 @@ class JobLock {
 };
 
 /// Whether a job's record is of a run that went to its end and wrote its files ("ok", or
-/// "collision": its tool met material), not a failed one.
+/// "collision": its tool met material; "gouge": it gouged its --part), not a failed one.
 bool ranToEnd(const ordered_json& record) {
-  return record["status"] == "ok" || record["status"] == "collision";
+  return record["status"] == "ok" || record["status"] == "collision" || record["status"] == "gouge";
 }
 
 /// The record of a finished job, or null when it has not run with these options.
@@ -465,15 +466,16 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
   std::string csv = "job,name,command,program,status,run_time_s,moves,steps,removed_" + V +
                     ",peak_mrr_" + Q +
                     ",peak_mrr_line,cutting_time_s,feed_time_before_s,feed_time_after_s,"
-                    "saving_relative,collisions,warnings,error\n";
+                    "saving_relative,collisions,gouges,warnings,error\n";
   ordered_json summary = ordered_json::array();
-  std::size_t ok = 0, collided = 0;
+  std::size_t ok = 0, collided = 0, gouged = 0;
   for (const ordered_json& r : records) {
     std::string warnings;
     for (const auto& w : r["warnings"])
       warnings += (warnings.empty() ? "" : "; ") + w.get<std::string>();
     ok += r["status"] == "ok";
     collided += r["status"] == "collision";
+    gouged += r["status"] == "gouge";
     csv += std::to_string(r["index"].get<std::size_t>() + 1) + "," + quote(r["name"]) + "," +
            r["command"].get<std::string>() + "," + quote(r["program"]) + "," +
            r["status"].get<std::string>() + "," + plain(r["run_time_s"]) + "," + plain(r["moves"]) +
@@ -481,7 +483,8 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
            value(r["peak_mrr_mm3_min"], Dimension::VolumeRate) + "," + plain(r["peak_mrr_line"]) +
            "," + plain(r["cutting_time_s"]) + "," + plain(r["feed_time_before_s"]) + "," +
            plain(r["feed_time_after_s"]) + "," + plain(r["saving_relative"]) + "," +
-           plain(r["collisions"]) + "," + quote(warnings) + "," +
+           plain(r["collisions"]) + "," + plain(r.value("gouges", ordered_json())) + "," +
+           quote(warnings) + "," +
            quote(r["error"].is_null() ? "" : r["error"].get<std::string>()) + "\n";
     ordered_json s = r;
     s.erase("spec");
@@ -491,7 +494,8 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
   j["jobs"] = records.size();
   j["ok"] = ok;
   j["collision"] = collided;
-  j["failed"] = records.size() - ok - collided;
+  j["gouge"] = gouged;
+  j["failed"] = records.size() - ok - collided - gouged;
   j["missing"] = missing;
   j["units_of_csv"] = {{"volume", std::string(unitLabel(Dimension::Volume, sys))},
                        {"mrr", std::string(unitLabel(Dimension::VolumeRate, sys))}};
@@ -500,10 +504,13 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
   writeAtomically(out / "batch.json", j.dump(2) + "\n");
   writeAtomically(out / "report.html", batchReportHtml(records, missing, out, sys));
   char line[256];
+  const std::string gougedText =
+      gouged > 0 ? ", " + std::to_string(gouged) + " gouged their part" : std::string();
   std::snprintf(line, sizeof line,
-                "merged %zu jobs (%zu ok, %zu with collisions, %zu failed) into %s/batch.csv, "
+                "merged %zu jobs (%zu ok, %zu with collisions%s, %zu failed) into %s/batch.csv, "
                 "batch.json, report.html\n",
-                records.size(), ok, collided, records.size() - ok - collided, out.string().c_str());
+                records.size(), ok, collided, gougedText.c_str(),
+                records.size() - ok - collided - gouged, out.string().c_str());
   std::string text = line;
   if (!missing.empty())
     text += std::to_string(missing.size()) + " of " + std::to_string(all.size()) +
@@ -626,6 +633,11 @@ void shardOutcomes(const std::vector<ManifestJob>& all, const Shard& shard, cons
         result.collisions.push_back("job " + j.name + ": " +
                                     std::to_string(r["collisions"].get<std::size_t>()) +
                                     " collision(s), in its summary.json");
+      else if (!r.is_null() && r.contains("gouges") && r["gouges"].is_number() &&
+               r["gouges"].get<std::size_t>() > 0)
+        result.gouges.push_back("job " + j.name + ": " +
+                                std::to_string(r["gouges"].get<std::size_t>()) +
+                                " gouge(s) of its --part, in its gouges.csv");
     }
 }
 

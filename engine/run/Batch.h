@@ -47,6 +47,8 @@ struct BatchReport {
   std::vector<std::string> failures;  ///< "job NAME failed: ERROR", one per failed job
   /// "job NAME: N collision(s) ...", one per job whose rapids, shank or holder met material.
   std::vector<std::string> collisions;
+  /// "job NAME: N gouge(s) ...", one per job that gouged its --part deeper than --tolerance.
+  std::vector<std::string> gouges;
 };
 
 /// Run the shard's jobs that have no record yet (and failed ones with retryFailed); with

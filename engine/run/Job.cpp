@@ -665,6 +665,34 @@ std::optional<PhysicsOptions> physicsOptions(const OptionValues& values, UnitSys
   return std::nullopt;
 }
 
+/// --part and its --tolerance and --allowance (defaults 0.05 mm, 0.002 in for an inch
+/// program); they need a stock.
+void partOptions(Job& job, const OptionValues& values, UnitSystem sys) {
+  auto text = [&](const char* name) { return optionText(values, name); };
+  job.part.file = text("part");
+  if (job.part.file.empty()) {
+    for (const char* name : {"tolerance", "allowance"})
+      if (!text(name).empty())
+        throw ParameterError(std::string("--") + name + " applies with --part");
+    return;
+  }
+  if (job.stock.none())
+    throw ParameterError("--part needs a --stock: the final stock is compared with the part");
+  if (!std::filesystem::is_regular_file(job.part.file))
+    throw Error("--part: file not found: " + job.part.file);
+  auto limit = [&](const char* name) {
+    if (text(name).empty()) return sys == UnitSystem::Inch ? 0.002 * 25.4 : 0.05;
+    const double v =
+        parseQuantity(text(name), Dimension::Length, sys, std::string("--") + name).value;
+    if (!(v >= 0.0))
+      throw ParameterError(std::string("--") + name + " must not be negative, found '" +
+                           text(name) + "'");
+    return v;
+  };
+  job.part.tolerance = limit("tolerance");
+  job.part.allowance = limit("allowance");
+}
+
 /// The job's stock (a CAMotics project's workpiece unless --stock) and the options that need
 /// one.
 void stockOptions(Job& job, const OptionValues& values,
@@ -704,6 +732,7 @@ void stockOptions(Job& job, const OptionValues& values,
     throw ParameterError("--cross-check-tolerance: expected a fraction in (0, 1)");
   job.stockModel = text("stock-model") == "dexel" ? StockModel::Dexel : StockModel::Voxel;
   if (!stock.empty()) job.stock = parseStock(stock, sys);
+  partOptions(job, values, sys);
 }
 
 /// The output folder and what goes into it; a re-fed program that would replace its own

@@ -11,6 +11,7 @@
 #include "engine/gcode/Toolpath.h"
 #include "engine/run/CutterOptions.h"
 #include "engine/run/OptionTable.h"
+#include "engine/run/PartCheck.h"
 #include "engine/run/Resolution.h"
 #include "engine/schedule/FeedScheduler.h"
 #include "engine/sim/Simulation.h"
@@ -65,6 +66,7 @@ struct Job {
   /// Probing moves stopped on the bounds of a mesh or stock.vdb stock, not its surface.
   bool probesOnBounds = false;
   StockSpec stock;
+  PartSpec part;  ///< --part, --tolerance, --allowance
   StockModel stockModel = StockModel::Dexel;
   UnitSystem units = UnitSystem::Metric;  ///< of the reports (and of bare numbers)
   double voxel = 0.0;                     ///< voxel size or dexel ray spacing, mm

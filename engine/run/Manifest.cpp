@@ -74,8 +74,8 @@ std::string contentHash(const std::string& path) {
 
 /// The options that name files: relative to the manifest, and their content part of the job
 /// (a FreeCAD .fctl's bits are not: an edited bit alone does not re-run its jobs).
-constexpr const char* kFileKeys[] = {"program", "stock",    "tool-table",
-                                     "tools",   "material", "machine"};
+constexpr const char* kFileKeys[] = {"program",  "stock",   "tool-table", "tools",
+                                     "material", "machine", "part"};
 
 /// A value of `key` that is not a file: a stock box, a bundled material's name.
 bool notAFile(const std::string& key, const std::string& v) {

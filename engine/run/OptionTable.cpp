@@ -82,6 +82,17 @@ std::vector<OptionInfo> makeTable() {
       plain("stock", K::Text, G::Stock, "",
             "box:X0,Y0,Z0,X1,Y1,Z1 (program units), a closed STL/OBJ/PLY mesh (mm) or an earlier "
             "run's stock.vdb; schedule's --model analytic runs without one"),
+      plain("part", K::Text, G::Stock, "",
+            "the part the program was made for: a closed STL/OBJ/PLY mesh (mm) or a .vdb level "
+            "set, in the program's frame; the final stock is compared with it (gouges, "
+            "leftovers, deviation.vdb; exit status 7 where a gouge is deeper than --tolerance)"),
+      quantity("tolerance", G::Stock, D::Length,
+               "with --part: a gouge counts where the part's material is removed deeper than "
+               "this (default 0.05mm; 0.002in for an inch program)"),
+      quantity("allowance", G::Stock, D::Length,
+               "with --part: a leftover counts where material is left thicker than this on "
+               "the part (default 0.05mm; 0.002in for an inch program; a roughing program's "
+               "stock to leave)"),
       choice("stock-model", G::Stock, {"voxel", "dexel"}, "dexel",
              "dexel (vertical rays, the default) or voxel (volume fractions)"),
       quantity("voxel", G::Simulation, D::Length,

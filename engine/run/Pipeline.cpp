@@ -4,6 +4,7 @@
 #include "engine/run/Summary.h"
 
 #include "cutters/Error.h"
+#include "cutters/Numbers.h"
 #include "engine/gcode/GcodeWriter.h"
 #include "engine/run/Output.h"
 #include "engine/run/Resolution.h"
@@ -210,6 +211,18 @@ PreparedRun prepareStocks(Job job) {
     if (auto* v = dynamic_cast<VoxelStock*>(run.stock.get())) v->captureRemoved(true);
     if (auto* d = dynamic_cast<DexelStock*>(run.stock.get())) d->captureRemoved(true);
   }
+  if (job.part.given()) {
+    run.part = std::make_unique<Part>(Part::fromFile(job.part.file));
+    const Box3 pb = run.part->bounds(), sb = run.stock->bounds();
+    if ((pb.max.array() < sb.min.array()).any() || (pb.min.array() > sb.max.array()).any()) {
+      auto f = [&](const Eigen::Vector3d& v) {
+        return formatNumber(v.x()) + ", " + formatNumber(v.y()) + ", " + formatNumber(v.z());
+      };
+      throw ParameterError("--part: the part (from " + f(pb.min) + " to " + f(pb.max) +
+                           " mm) lies outside the stock (from " + f(sb.min) + " to " + f(sb.max) +
+                           " mm): a part mesh is read in mm, in the program's frame");
+    }
+  }
   run.job = std::move(job);
   return run;
 }
@@ -267,6 +280,10 @@ RunResult executeRun(PreparedRun run, const ProgressFunction& progress) {
         withScheduleHeader(writeProgram(readFile(job.mainProgram()), job.path, r.plan.plan), job);
     if (r.stock) r.verified = verifySchedule(r);
   }
+  r.partModel = std::move(run.part);
+  if (r.partModel)
+    r.part = checkPart(*r.partModel, job.part, *r.stock, job.path, r.sim.steps, job.cutters,
+                       job.stock.box ? &*job.stock.box : nullptr);
   // The first step at the peak: a later one counts as higher only beyond rounding (a slot's
   // steps on two lines took the same MRR to the last bits, and which of them was "higher"
   // changed with the order the stock summed its columns in).

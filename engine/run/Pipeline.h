@@ -35,6 +35,7 @@ struct PreparedRun {
   Job job;
   std::unique_ptr<Stock> stock;  ///< null without a stock
   std::unique_ptr<Stock> other;  ///< the cross-check's stock, or null
+  std::unique_ptr<Part> part;    ///< --part, read and checked, or null
 };
 
 /// Called now and then with (steps done, steps in all).
@@ -76,6 +77,8 @@ struct RunResult {
   std::string refed;         ///< the re-fed program text (schedule jobs)
   Verification verified;     ///< the re-fed program re-simulated (schedule jobs with a stock)
   std::size_t peakStep = 0;  ///< the first step of the highest measured MRR (0 when none)
+  PartCheck part;            ///< the final stock against --part (part.done with one)
+  std::shared_ptr<const Part> partModel;  ///< --part, read (null without one)
 };
 
 /// A schedule's re-fed program (RunResult::refed) read back as the program was and simulated
@@ -95,11 +98,12 @@ Verification verifySchedule(const RunResult& r);
 /// stock counts its bounds unknown: the 64 MB.
 double memoryEstimate(const Job& job);
 
-/// Build the job's stock (and the cross-check's) and check that the tool path reaches it.
-/// Throws Error; writes nothing.
+/// Build the job's stock (and the cross-check's), check that the tool path reaches it, read
+/// the part and check that it lies in the stock. Throws Error; writes nothing.
 PreparedRun prepareRun(Job job);
 
-/// Simulate, cross-check and schedule. Throws Error from the model or the stock.
+/// Simulate, cross-check and schedule, and compare the final stock with the part. Throws Error
+/// from the model or the stock.
 RunResult executeRun(PreparedRun run, const ProgressFunction& progress = {});
 
 /// prepareRun then executeRun.

@@ -70,6 +70,19 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
                         [&](std::ostream& os) { writeStepsTable(os, result, rows); });
   };
   if (w.steps) writeTable("steps.csv", nullptr);
+  const PartCheck& part = result.part;
+  if (part.done && which != Job::Outputs::Summary) {
+    for (const bool gouges : {true, false})
+      writeAtomically(
+          dir / (gouges ? "gouges.csv" : "leftovers.csv"),
+          regionTable(part, gouges, result.job.path, result.sim.steps, result.job.units));
+    w.partTables = true;
+  }
+  if (part.done && which == Job::Outputs::All) {
+    writeDeviationVdb((dir / "deviation.vdb").string(), part.stockPoints, part.deviation,
+                      result.stock->resolution());
+    w.deviationVdb = true;
+  }
   const std::string summary = summaryJson(result);
   writeAtomically(dir / "summary.json", summary);
   writeRefedProgram(result, dir);

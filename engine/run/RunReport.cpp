@@ -9,6 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -168,12 +171,31 @@ json surfaceJson(const RunResult& result, const VoxelStock& voxels,
   for (const auto& t : mesh.triangles)
     for (unsigned v : t)
       indices.push_back(v);
-  return {{"vertices", mesh.points.size()},
-          {"triangles", mesh.triangles.size()},
-          {"cell", value(toDisplay(cell, Dimension::Length, result.job.units))},
-          {"positions", base64(positions.data(), positions.size() * sizeof(float))},
-          {"indices", base64(indices.data(), indices.size() * sizeof(std::uint32_t))},
-          {"vertex_row", base64(vertexRow.data(), vertexRow.size() * sizeof(std::int32_t))}};
+  json out = {{"vertices", mesh.points.size()},
+              {"triangles", mesh.triangles.size()},
+              {"cell", value(toDisplay(cell, Dimension::Length, result.job.units))},
+              {"positions", base64(positions.data(), positions.size() * sizeof(float))},
+              {"indices", base64(indices.data(), indices.size() * sizeof(std::uint32_t))},
+              {"vertex_row", base64(vertexRow.data(), vertexRow.size() * sizeof(std::int32_t))}};
+  if (result.partModel) {
+    // Each vertex's signed distance from the part (display units), and the colour scale's
+    // half range: five times the larger of the tolerance and the allowance.
+    std::vector<float> deviation(mesh.points.size());
+    const Part& part = *result.partModel;
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, mesh.points.size(), 1024),
+        [&](const tbb::blocked_range<std::size_t>& r) {
+          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const auto& p = mesh.points[i];
+            deviation[i] = static_cast<float>(part.signedDistance({p[0], p[1], p[2]})) * f;
+          }
+        });
+    out["deviation"] = base64(deviation.data(), deviation.size() * sizeof(float));
+    const PartSpec& spec = result.part.spec;
+    out["deviation_range"] =
+        value(5.0 * std::max({spec.tolerance, spec.allowance, 0.1 * h}) * static_cast<double>(f));
+  }
+  return out;
 }
 
 }  // namespace
@@ -274,14 +296,12 @@ void writeRunReportHtml(std::ostream& os, const RunResult& result,
   data["summary"] = json::parse(summaryJsonText);
   data["warnings"] = runWarnings(result, written);
   auto label = [&](Dimension d) { return std::string(unitLabel(d, sys)); };
-  data["units"] = {{"length", label(Dimension::Length)},
-                   {"volume", label(Dimension::Volume)},
-                   {"mrr", label(Dimension::VolumeRate)},
-                   {"feed", label(Dimension::Feed)},
-                   {"acceleration", label(Dimension::Acceleration)},
-                   {"force", label(Dimension::Force)},
-                   {"torque", label(Dimension::Torque)},
-                   {"power", label(Dimension::Power)}};
+  data["units"] = {
+      {"length", label(Dimension::Length)}, {"volume", label(Dimension::Volume)},
+      {"area", label(Dimension::Area)},     {"mrr", label(Dimension::VolumeRate)},
+      {"feed", label(Dimension::Feed)},     {"acceleration", label(Dimension::Acceleration)},
+      {"force", label(Dimension::Force)},   {"torque", label(Dimension::Torque)},
+      {"power", label(Dimension::Power)}};
   json files = json::array();
   if (written.steps) files.push_back("steps.csv");
   files.push_back("summary.json");
@@ -290,9 +310,24 @@ void writeRunReportHtml(std::ostream& os, const RunResult& result,
   if (written.stockFiles)
     for (const char* f : {"removed.vdb", "stock.vdb", "stock.stl"})
       files.push_back(f);
+  if (written.partTables)
+    for (const char* f : {"gouges.csv", "leftovers.csv"})
+      files.push_back(f);
+  if (written.deviationVdb) files.push_back("deviation.vdb");
   for (const std::string& p : written.plots)
     files.push_back(p);
   data["files"] = files;
+  // The source text of the lines that cut the gouges (the first 20 of each of the first 100).
+  if (result.part.done) {
+    std::vector<std::size_t> gougeSteps;
+    for (std::size_t g = 0; g < result.part.gouges.size() && g < 100; ++g) {
+      const std::vector<GougeLine> lines =
+          gougeLines(result.part.gouges[g], job.path, result.sim.steps);
+      for (std::size_t k = 0; k < lines.size() && k < 20; ++k)
+        gougeSteps.push_back(lines[k].steps.front());
+    }
+    data["part_lines"] = sourceLines(result, gougeSteps);
+  }
   json sources = json::array();
   for (const std::string& f : job.path.files)
     sources.push_back(f);

@@ -357,6 +357,54 @@ ordered_json toolsJson(const RunResult& result) {
   return out;
 }
 
+/// The final stock against --part: the limits, and the regions (the first 100 of each kind,
+/// largest volume first; a gouge with the lines that cut its floor, the first 20).
+ordered_json partJson(const RunResult& result) {
+  const PartCheck& c = result.part;
+  const UnitSystem sys = result.job.units;
+  auto L = [&](double v) { return num(toDisplay(v, Dimension::Length, sys)); };
+  auto regions = [&](const std::vector<DeviationRegion>& list, bool gouge) {
+    ordered_json a = ordered_json::array();
+    double volume = 0.0;
+    for (const DeviationRegion& r : list)
+      volume += r.volume;
+    for (std::size_t i = 0; i < list.size() && i < 100; ++i) {
+      const DeviationRegion& r = list[i];
+      ordered_json o{{gouge ? "depth" : "thickness", L(r.extreme)},
+                     {"area", num(toDisplay(r.area, Dimension::Area, sys))},
+                     {"volume", num(toDisplay(r.volume, Dimension::Volume, sys))},
+                     {"at", {L(r.at.x()), L(r.at.y()), L(r.at.z())}}};
+      if (gouge) {
+        ordered_json lines = ordered_json::array();
+        const std::vector<GougeLine> by = gougeLines(r, result.job.path, result.sim.steps);
+        for (std::size_t k = 0; k < by.size() && k < 20; ++k)
+          lines.push_back({{"file", result.job.path.files[static_cast<std::size_t>(by[k].file)]},
+                           {"line", by[k].line},
+                           {"floor_area", num(toDisplay(by[k].area, Dimension::Area, sys))},
+                           {"first_step", by[k].steps.front()}});
+        o["lines"] = lines;
+      }
+      a.push_back(o);
+    }
+    return ordered_json{
+        {"count", list.size()},
+        {gouge ? "deepest" : "thickest", L(gouge ? c.deepestGouge() : c.thickestLeftover())},
+        {"volume", num(toDisplay(volume, Dimension::Volume, sys))},
+        {"regions", a}};
+  };
+  return {{"file", c.spec.file},
+          {"tolerance", L(c.spec.tolerance)},
+          {"allowance", L(c.spec.allowance)},
+          {"area", num(toDisplay(c.area, Dimension::Area, sys))},
+          {"volume", num(toDisplay(c.partVolume, Dimension::Volume, sys))},
+          {"sample_size", L(c.spacing)},
+          {"samples", c.samples},
+          {"gouges", regions(c.gouges, true)},
+          {"leftovers", regions(c.leftovers, false)},
+          {"missing", regions(c.missing, true)},
+          {"seconds", c.seconds}};
+}
+
 }  // namespace
 
 std::string summaryJson(const RunResult& result) {
@@ -434,6 +482,7 @@ std::string summaryJson(const RunResult& result) {
                       {"feed", std::string(unitLabel(Dimension::Feed, sys))}};
   if (job.scheduling()) j["schedule"] = scheduleJson(result);
   if (job.simulation.physics) j["physics"] = physicsJson(result);
+  if (result.part.done) j["part"] = partJson(result);
   return j.dump(2) + "\n";
 }
 
@@ -726,6 +775,48 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
   }
   if (r.collisions.size() > 10)
     appendf(report, "collision: %zu more places in summary.json\n", r.collisions.size() - 10);
+  if (result.part.done) {
+    // The part: the totals, then the five largest gouges with the lines that cut them.
+    const PartCheck& c = result.part;
+    appendf(report,
+            "part %s: %zu gouge(s) deeper than %s (deepest %s), %zu leftover(s) thicker than %s "
+            "(thickest %s); %zu samples of %s in %.2f s\n",
+            c.spec.file.c_str(), c.gouges.size(), q(c.spec.tolerance, Dimension::Length).c_str(),
+            q(c.deepestGouge(), Dimension::Length).c_str(), c.leftovers.size(),
+            q(c.spec.allowance, Dimension::Length).c_str(),
+            q(c.thickestLeftover(), Dimension::Length).c_str(), c.samples,
+            q(c.spacing, Dimension::Length).c_str(), c.seconds);
+    for (std::size_t i = 0; i < c.gouges.size() && i < 5; ++i) {
+      const DeviationRegion& g = c.gouges[i];
+      std::string lines;
+      const std::vector<GougeLine> by = gougeLines(g, job.path, r.steps);
+      for (std::size_t k = 0; k < by.size() && k < 3; ++k)
+        lines += (k ? ", " : "") + job.path.files[static_cast<std::size_t>(by[k].file)] + ":" +
+                 std::to_string(by[k].line);
+      if (by.size() > 3) lines += " and " + std::to_string(by.size() - 3) + " more";
+      appendf(report, "gouge: %s deep, %s, %s at (%s, %s, %s), cut by %s\n",
+              q(g.extreme, Dimension::Length).c_str(), q(g.area, Dimension::Area).c_str(),
+              q(g.volume, Dimension::Volume).c_str(),
+              formatNumber(toDisplay(g.at.x(), Dimension::Length, sys)).c_str(),
+              formatNumber(toDisplay(g.at.y(), Dimension::Length, sys)).c_str(),
+              formatNumber(toDisplay(g.at.z(), Dimension::Length, sys)).c_str(), lines.c_str());
+    }
+    if (c.gouges.size() > 5)
+      appendf(report, "gouge: %zu more in gouges.csv and summary.json\n", c.gouges.size() - 5);
+    // Material the part needs that the stock never held: said where it is more than a reading's
+    // error at the stock's own edges (a fraction of a cell).
+    for (const DeviationRegion& m : c.missing)
+      if (m.extreme > 0.5 * job.voxel) {
+        appendf(report,
+                "warning: the stock does not hold the part: %s of it missing at (%s, %s, %s), "
+                "no step cut there (summary.json: part.missing)\n",
+                q(m.extreme, Dimension::Length).c_str(),
+                formatNumber(toDisplay(m.at.x(), Dimension::Length, sys)).c_str(),
+                formatNumber(toDisplay(m.at.y(), Dimension::Length, sys)).c_str(),
+                formatNumber(toDisplay(m.at.z(), Dimension::Length, sys)).c_str());
+        break;
+      }
+  }
   std::string targets = q(plan.targetMrr, Dimension::VolumeRate);
   if (plan.targets.size() > 1) {
     targets.clear();
@@ -773,10 +864,11 @@ std::string runReport(const RunResult& result, const WrittenOutputs& written) {
     plotted += "," + f;
   if (written.refedProgram)
     programName = "," + std::filesystem::path(job.mainProgram()).filename().string();
-  appendf(report, "wrote %s/{%s%ssummary.json%s%s%s}\n", job.out.c_str(),
+  appendf(report, "wrote %s/{%s%s%ssummary.json%s%s%s%s}\n", job.out.c_str(),
           written.report ? "report.html," : "", written.steps ? "steps.csv," : "",
-          written.stockFiles ? ",removed.vdb,stock.vdb,stock.stl" : "", programName.c_str(),
-          plotted.c_str());
+          written.partTables ? "gouges.csv,leftovers.csv," : "",
+          written.stockFiles ? ",removed.vdb,stock.vdb,stock.stl" : "",
+          written.deviationVdb ? ",deviation.vdb" : "", programName.c_str(), plotted.c_str());
   return report;
 }
 

@@ -23,6 +23,8 @@ struct WrittenOutputs {
   bool steps = true;               ///< steps.csv was written
   bool stockFiles = false;         ///< removed.vdb, stock.vdb and stock.stl were written
   bool report = false;             ///< report.html was written
+  bool partTables = false;         ///< gouges.csv and leftovers.csv were written (--part)
+  bool deviationVdb = false;       ///< deviation.vdb was written (--part)
 };
 
 /// The lines `engage simulate` prints (each ending in a newline; warnings start "warning: ").
