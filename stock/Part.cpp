@@ -60,6 +60,15 @@ void splitTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eig
   splitTriangle(m, b, c, spacing2, fn);
 }
 
+/// The sample of triangle pqr.
+PartSample piece(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r,
+                 const Eigen::Vector3f& normal) {
+  return {((p + q + r) / 3.0).cast<float>(),
+          normal,
+          static_cast<float>(0.5 * (q - p).cross(r - p).norm()),
+          {p.cast<float>(), q.cast<float>(), r.cast<float>()}};
+}
+
 /// How far from q along the unit direction d the box's boundary is (0 when q is outside it).
 double exitDistance(const Eigen::Vector3d& q, const Eigen::Vector3d& d, const Box3& box) {
   double t = std::numeric_limits<double>::infinity();
@@ -83,10 +92,10 @@ Box3 grown(Box3 b, double by) {
 /// where the nearer face is a plane), bisection where it leaves the bracket; to `precision`.
 double shareEnd(const Part& part, const Eigen::Vector3d& q, const Eigen::Vector3d& dir,
                 double beyond, double precision) {
-  auto isBeyond = [&](double s) { return part.distance(q + s * dir) < s - precision; };
+  auto isBeyond = [&](double s) { return part.distance(q + s * dir, q) < s - precision; };
   double a = 0.0, b = beyond;
   while (b - a > precision) {
-    const Eigen::Vector3d x = q + b * dir, p = part.closestPoint(x);
+    const Eigen::Vector3d x = q + b * dir, p = part.closestPoint(x, q);
     const Eigen::Vector3d m = (x - p).normalized();
     const double denominator = 1.0 - dir.dot(m);
     double s = denominator > 1e-12 ? (q - p).dot(m) / denominator : 0.5 * (a + b);
@@ -178,8 +187,12 @@ double Part::distance(const Eigen::Vector3d& p) const {
   return std::sqrt(impl_->tree.squared_distance(cgal(p)));
 }
 
-Eigen::Vector3d Part::closestPoint(const Eigen::Vector3d& p) const {
-  const Point c = impl_->tree.closest_point(cgal(p));
+double Part::distance(const Eigen::Vector3d& p, const Eigen::Vector3d& onPart) const {
+  return std::sqrt(impl_->tree.squared_distance(cgal(p), cgal(onPart)));
+}
+
+Eigen::Vector3d Part::closestPoint(const Eigen::Vector3d& p, const Eigen::Vector3d& onPart) const {
+  const Point c = impl_->tree.closest_point(cgal(p), cgal(onPart));
   return {c.x(), c.y(), c.z()};
 }
 
@@ -199,11 +212,20 @@ std::vector<PartSample> Part::samples(double spacing) const {
     if (!(norm > 0.0)) continue;  // a degenerate triangle bounds nothing
     const Eigen::Vector3f normal = (cross / norm).cast<float>();
     auto add = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
-      out.push_back({((p + q + r) / 3.0).cast<float>(), normal,
-                     static_cast<float>(0.5 * (q - p).cross(r - p).norm())});
+      out.push_back(piece(p, q, r, normal));
     };
     splitTriangle(a, b, c, spacing * spacing, add);
   }
+  return out;
+}
+
+std::vector<PartSample> splitSample(const PartSample& sample, double spacing) {
+  std::vector<PartSample> out;
+  auto add = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
+    out.push_back(piece(p, q, r, sample.normal));
+  };
+  splitTriangle(sample.corners[0].cast<double>(), sample.corners[1].cast<double>(),
+                sample.corners[2].cast<double>(), spacing * spacing, add);
   return out;
 }
 
@@ -228,56 +250,59 @@ std::vector<SampleDeviation> measureDeviation(const Part& part,
   const Box3 stockBox = holds ? *holds : grown(stock.bounds(), h),
              partBox = grown(part.bounds(), h);
   std::vector<SampleDeviation> out(samples.size());
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, samples.size(), 512),
-      [&](const tbb::blocked_range<std::size_t>& r) {
-        const std::unique_ptr<MaterialReader> reader = stock.materialReader();
-        std::vector<Eigen::Vector3d> one(1);
-        auto material = [&](const Eigen::Vector3d& p) {
-          one[0] = p;
-          return reader->read(one)[0] != 0;
-        };
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-          const Eigen::Vector3d q = samples[i].point.cast<double>();
-          const bool inMaterial = material(q);
-          const Eigen::Vector3d dir = (inMaterial ? 1.0 : -1.0) * samples[i].normal.cast<double>();
-          const double cap = exitDistance(q, dir, inMaterial ? stockBox : partBox);
-          // The share ends where another point of the part is nearer: once past there, it stays
-          // past (a point's nearest point is the nearest of every point between them). Checked at
-          // distances doubling from two cells: a walk goes at most twice as far as its share.
-          auto beyondShare = [&](double s) { return part.distance(q + s * dir) < s - precision; };
-          double lo = 0.0, hi = -1.0, check = 2.0 * h;
-          bool pastShare = false;
-          while (lo < cap) {
-            const double s = std::min(lo + stepLength, cap);
-            if (material(q + s * dir) != inMaterial) {
-              hi = s;
-              break;
-            }
-            lo = s;
-            if (lo >= check) {
-              if ((pastShare = beyondShare(lo))) break;
-              check *= 2.0;
-            }
-          }
-          double t = lo;
-          if (hi > 0.0) {
-            while (hi - lo > precision) {
-              const double mid = 0.5 * (lo + hi);
-              (material(q + mid * dir) == inMaterial ? lo : hi) = mid;
-            }
-            t = 0.5 * (lo + hi);
-            // A hundredth of a cell is as good as none, whatever the share (a query saved at
-            // every sample of a surface cut where the part has it).
-            pastShare = t > 0.01 * h && beyondShare(t);
-          }
-          SampleDeviation& d = out[i];
-          d.surfaceMet = hi > 0.0 && !pastShare;
-          d.stockPoint = (q + t * dir).cast<float>();
-          if (pastShare) t = shareEnd(part, q, dir, t, precision);
-          d.deviation = static_cast<float>(inMaterial ? t : -t);
-        }
-      });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 512),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      const std::unique_ptr<MaterialReader> reader = stock.materialReader();
+                      std::vector<Eigen::Vector3d> one(1);
+                      auto material = [&](const Eigen::Vector3d& p) {
+                        one[0] = p;
+                        return reader->read(one)[0] != 0;
+                      };
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        const Eigen::Vector3d q = samples[i].point.cast<double>();
+                        const bool inMaterial = material(q);
+                        const Eigen::Vector3d dir =
+                            (inMaterial ? 1.0 : -1.0) * samples[i].normal.cast<double>();
+                        const double cap = exitDistance(q, dir, inMaterial ? stockBox : partBox);
+                        // The share ends where another point of the part is nearer: once past
+                        // there, it stays past (a point's nearest point is the nearest of every
+                        // point between them). Checked at distances doubling from two cells: a walk
+                        // goes at most twice as far as its share.
+                        auto beyondShare = [&](double s) {
+                          return part.distance(q + s * dir, q) < s - precision;
+                        };
+                        double lo = 0.0, hi = -1.0, check = 2.0 * h;
+                        bool pastShare = false;
+                        while (lo < cap) {
+                          const double s = std::min(lo + stepLength, cap);
+                          if (material(q + s * dir) != inMaterial) {
+                            hi = s;
+                            break;
+                          }
+                          lo = s;
+                          if (lo >= check) {
+                            if ((pastShare = beyondShare(lo))) break;
+                            check *= 2.0;
+                          }
+                        }
+                        double t = lo;
+                        if (hi > 0.0) {
+                          while (hi - lo > precision) {
+                            const double mid = 0.5 * (lo + hi);
+                            (material(q + mid * dir) == inMaterial ? lo : hi) = mid;
+                          }
+                          t = 0.5 * (lo + hi);
+                          // A hundredth of a cell is as good as none, whatever the share (a query
+                          // saved at every sample of a surface cut where the part has it).
+                          pastShare = t > 0.01 * h && beyondShare(t);
+                        }
+                        SampleDeviation& d = out[i];
+                        d.surfaceMet = hi > 0.0 && !pastShare;
+                        d.stockPoint = (q + t * dir).cast<float>();
+                        if (pastShare) t = shareEnd(part, q, dir, t, precision);
+                        d.deviation = static_cast<float>(inMaterial ? t : -t);
+                      }
+                    });
   return out;
 }
 

@@ -18,18 +18,24 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
 
 namespace engage {
 
-/// A piece of the part's surface: its centre, outward unit normal and area (mm, mm^2).
+/// A piece of the part's surface: its centre, outward unit normal and area (mm, mm^2), and
+/// its corners (to be split further).
 struct PartSample {
   Eigen::Vector3f point;
   Eigen::Vector3f normal;
   float area = 0.0f;
+  std::array<Eigen::Vector3f, 3> corners;
 };
+
+/// The pieces of a sample no longer than `spacing` across, split as Part::samples splits.
+std::vector<PartSample> splitSample(const PartSample& sample, double spacing);
 
 /// The stock against the part at one sample.
 struct SampleDeviation {
@@ -65,8 +71,11 @@ class Part {
   double area() const;
   /// Distance from p to the part's surface, mm.
   double distance(const Eigen::Vector3d& p) const;
-  /// The point of the part's surface nearest p.
-  Eigen::Vector3d closestPoint(const Eigen::Vector3d& p) const;
+  /// The same, given a point of the part's surface near p (a sample's centre: the search
+  /// starts from within that distance).
+  double distance(const Eigen::Vector3d& p, const Eigen::Vector3d& onPart) const;
+  /// The point of the part's surface nearest p, given a point of it near p.
+  Eigen::Vector3d closestPoint(const Eigen::Vector3d& p, const Eigen::Vector3d& onPart) const;
   /// Signed distance: negative inside the part.
   double signedDistance(const Eigen::Vector3d& p) const;
   /// The surface in samples no longer than `spacing` across (each triangle split at the midpoint

@@ -710,7 +710,10 @@
     var ul = el('ul');
     var what = {'steps.csv': 'one row per step', 'summary.json': 'the figures on this page',
                 'removed.vdb': 'the material each step took (grids removed, step, mrr)',
-                'stock.vdb': 'the final stock (fractions and surface)', 'stock.stl': 'the final stock as a mesh'};
+                'stock.vdb': 'the final stock (fractions and surface)', 'stock.stl': 'the final stock as a mesh',
+                'gouges.csv': 'the gouges in the part, with the lines that cut them',
+                'leftovers.csv': 'the material left on the part',
+                'deviation.vdb': 'the stock\'s distance from the part (grid deviation)'};
     data.files.forEach(function (f) {
       ul.appendChild(el('li', null, el('a', {href: f}, f), what[f] ? ' – ' + what[f] : ''));
     });

@@ -5,11 +5,16 @@
 #include "engine/report/SurfaceSteps.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <numeric>
 #include <unordered_map>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 namespace engage {
 namespace {
@@ -35,44 +40,104 @@ class Components {
   std::vector<std::size_t> parent_;
 };
 
-/// The flagged samples joined where they lie within `reach` of each other (spatial hashing in
-/// cubes of that side); returns per sample its component's root (or -1 when not flagged).
+/// Samples sorted into cubes of side `cube` (a sorted list of keys: millions of samples
+/// without a hash map's nodes), for the samples near a point.
+class SampleGrid {
+ public:
+  SampleGrid(const std::vector<PartSample>& samples, const std::vector<char>* only, double cube)
+      : cube_(cube) {
+    for (std::size_t i = 0; i < samples.size(); ++i)
+      if (!only || (*only)[i])
+        sorted_.emplace_back(key(cell(samples[i].point)), static_cast<std::uint32_t>(i));
+    std::sort(sorted_.begin(), sorted_.end());
+  }
+  /// Calls fn(j) for every sample in the 27 cubes about p.
+  template <typename Fn>
+  void near(const Eigen::Vector3f& p, Fn&& fn) const {
+    const std::array<int, 3> c = cell(p);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const std::uint64_t k = key({c[0] + dx, c[1] + dy, c[2] + dz});
+          auto it = std::lower_bound(sorted_.begin(), sorted_.end(), std::make_pair(k, 0u));
+          for (; it != sorted_.end() && it->first == k; ++it)
+            fn(static_cast<std::size_t>(it->second));
+        }
+  }
+
+ private:
+  std::array<int, 3> cell(const Eigen::Vector3f& p) const {
+    return {static_cast<int>(std::floor(p.x() / cube_)),
+            static_cast<int>(std::floor(p.y() / cube_)),
+            static_cast<int>(std::floor(p.z() / cube_))};
+  }
+  static std::uint64_t key(const std::array<int, 3>& c) {
+    auto part = [](int v) { return static_cast<std::uint64_t>(v + (1 << 20)) & 0x1FFFFFu; };
+    return part(c[0]) | part(c[1]) << 21 | part(c[2]) << 42;
+  }
+  double cube_;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> sorted_;
+};
+
+/// The flagged samples joined where they lie within `reach` of each other; returns per sample
+/// its component's root (or -1 when not flagged).
 std::vector<long> joinNeighbours(const std::vector<PartSample>& samples,
                                  const std::vector<char>& flagged, double reach) {
-  struct KeyHash {
-    std::size_t operator()(const std::array<int, 3>& k) const {
-      return (static_cast<std::size_t>(k[0]) * 73856093u) ^
-             (static_cast<std::size_t>(k[1]) * 19349663u) ^
-             (static_cast<std::size_t>(k[2]) * 83492791u);
-    }
-  };
-  auto key = [&](const Eigen::Vector3f& p) {
-    return std::array<int, 3>{static_cast<int>(std::floor(p.x() / reach)),
-                              static_cast<int>(std::floor(p.y() / reach)),
-                              static_cast<int>(std::floor(p.z() / reach))};
-  };
-  std::unordered_map<std::array<int, 3>, std::vector<std::size_t>, KeyHash> cubes;
-  for (std::size_t i = 0; i < samples.size(); ++i)
-    if (flagged[i]) cubes[key(samples[i].point)].push_back(i);
+  const SampleGrid grid(samples, &flagged, reach);
   Components c(samples.size());
   const float reach2 = static_cast<float>(reach * reach);
   for (std::size_t i = 0; i < samples.size(); ++i) {
     if (!flagged[i]) continue;
-    const auto k = key(samples[i].point);
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = cubes.find({k[0] + dx, k[1] + dy, k[2] + dz});
-          if (it == cubes.end()) continue;
-          for (std::size_t j : it->second)
-            if (j < i && (samples[j].point - samples[i].point).squaredNorm() <= reach2)
-              c.join(i, j);
-        }
+    grid.near(samples[i].point, [&](std::size_t j) {
+      if (j < i && (samples[j].point - samples[i].point).squaredNorm() <= reach2) c.join(i, j);
+    });
   }
   std::vector<long> root(samples.size(), -1);
   for (std::size_t i = 0; i < samples.size(); ++i)
     if (flagged[i]) root[i] = static_cast<long>(c.find(i));
   return root;
+}
+
+/// The samples beside a region's edge split again, four times finer, and measured: a region's
+/// area (and so its volume) is then counted to a quarter of a sample along its outline. A
+/// sample is beside an edge where a neighbour within `reach` is of another kind (gouge,
+/// leftover, neither). Skipped where the finer samples would pass half of kMaxPartSamples.
+void refineEdges(const Part& part, const Stock& stock, const Box3* holds, const PartSpec& spec,
+                 double spacing, double reach, std::vector<PartSample>& samples,
+                 std::vector<SampleDeviation>& dev) {
+  auto kind = [&](std::size_t i) {
+    return dev[i].deviation < -spec.tolerance ? -1 : dev[i].deviation > spec.allowance ? 1 : 0;
+  };
+  const SampleGrid grid(samples, nullptr, reach);
+  const float reach2 = static_cast<float>(reach * reach);
+  // From the flagged samples (few, mostly): each with a neighbour of another kind marks both.
+  std::vector<char> edge(samples.size(), 0);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const int k = kind(i);
+    if (k == 0) continue;
+    grid.near(samples[i].point, [&](std::size_t j) {
+      if (kind(j) != k && (samples[j].point - samples[i].point).squaredNorm() <= reach2)
+        edge[i] = edge[j] = 1;
+    });
+  }
+  std::vector<PartSample> finer;
+  std::vector<PartSample> kept;
+  std::vector<SampleDeviation> keptDev;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (edge[i]) {
+      for (PartSample& p : splitSample(samples[i], 0.25 * spacing))
+        finer.push_back(std::move(p));
+      if (finer.size() > kMaxPartSamples / 2) return;
+    } else {
+      kept.push_back(samples[i]);
+      keptDev.push_back(dev[i]);
+    }
+  }
+  const std::vector<SampleDeviation> finerDev = measureDeviation(part, finer, stock, holds);
+  kept.insert(kept.end(), finer.begin(), finer.end());
+  keptDev.insert(keptDev.end(), finerDev.begin(), finerDev.end());
+  samples = std::move(kept);
+  dev = std::move(keptDev);
 }
 
 /// The regions of one kind (gouges: deviation < -tolerance; leftovers: > allowance).
@@ -157,19 +222,21 @@ PartCheck checkPart(const Part& part, const PartSpec& spec, const Stock& stock,
   for (std::size_t n = part.sampleCount(c.spacing); n > kMaxPartSamples;
        n = part.sampleCount(c.spacing))
     c.spacing *= 1.05 * std::sqrt(static_cast<double>(n) / static_cast<double>(kMaxPartSamples));
-  const std::vector<PartSample> samples = part.samples(c.spacing);
+  std::vector<PartSample> samples = part.samples(c.spacing);
+  if (stopRequested()) throw Interrupted();
+  std::vector<SampleDeviation> dev = measureDeviation(part, samples, stock, holds);
+  if (stopRequested()) throw Interrupted();
+  // Pieces of the surface whose centres lie within one and a half samples are neighbours
+  // (pieces sharing an edge lie within one).
+  const double reach = 1.5 * c.spacing;
+  refineEdges(part, stock, holds, spec, c.spacing, reach, samples, dev);
+  if (stopRequested()) throw Interrupted();
   c.samples = samples.size();
-  if (stopRequested()) throw Interrupted();
-  const std::vector<SampleDeviation> dev = measureDeviation(part, samples, stock, holds);
-  if (stopRequested()) throw Interrupted();
   for (const SampleDeviation& d : dev)
     if (d.surfaceMet) {
       c.stockPoints.push_back(d.stockPoint);
       c.deviation.push_back(d.deviation);
     }
-  // Pieces of the surface whose centres lie within one and a half samples are neighbours
-  // (pieces sharing an edge lie within one).
-  const double reach = 1.5 * c.spacing;
   std::vector<long> gougeOf, leftoverOf;
   // A region smaller than a cell's face is below what the stock resolves (a voxel stock's
   // reading at a convex edge can be a few hundredths of a cell off over such a patch).

@@ -37,9 +37,9 @@ def check(ok, what):
         print("FAIL:", what)
 
 
-def run(args):
+def run(args, status=0):
     p = subprocess.run([ENGAGE] + args + ["--quiet"], capture_output=True, text=True)
-    if p.returncode != 0:
+    if p.returncode != status:
         raise SystemExit(f"engage {' '.join(args)} exited {p.returncode}: {p.stderr}")
     return p.stdout
 
@@ -240,6 +240,20 @@ run(["simulate", three, "--tools", os.path.join(DATA, "tools/three_tools.json"),
      "box:0,0,-10,60,40,0", "--out", out])
 check_run(out, three, 2, True,
           ["tools.0.removed", "tools.1.removed", "tools.2.removed", "tools.2.peak_mrr.line"])
+
+# A run against its part (exit status 7: a gouge): the part's card and section with the line
+# that cut the gouge and its G-code, the 3D view coloured by the deviation.
+pocket = os.path.join(DATA, "gcode/part_check/pocket_gouge.ngc")
+out = os.path.join(OUT, "part")
+run(["simulate", pocket, "--tool", "flat", "--diameter", "6mm", "--stock", "box:0,0,-10,40,40,0",
+     "--part", os.path.join(DATA, "gcode/part_check/pocket_part.obj"), "--out", out], status=7)
+check_run(out, pocket, 2, True,
+          ["part.gouges.count", "part.gouges.deepest", "part.gouges.regions.0.depth",
+           "part.gouges.regions.0.volume", "part.gouges.regions.0.lines.0.floor_area",
+           "part.leftovers.regions.0.thickness"])
+page = open_page(os.path.join(out, "report.html"))
+check("G1 X27 F600" in [c.strip() for c in page.code],
+      f"part: the gouging line's G-code is not on the page: {page.code}")
 
 # A batch with a failing job; --outputs tables: the jobs' reports without 3D view.
 out = os.path.join(OUT, "batch")

@@ -211,3 +211,25 @@ def test_fig9_example_script(tmp_path):
     ratio = float(run.stdout.split("= ")[1].split(" x")[0])
     assert 1.9 < ratio <= 2.0 + 1e-3
     assert png.stat().st_size > 10000
+
+
+def test_part_finds_the_slot_cut_too_deep(slot, tmp_path):
+    # The part is the box below Z-1.9; SLOT cuts 2 mm deep: its floor, the stadium of
+    # 30 x 6 mm and a 3 mm disc, gouges the part 0.1 mm (lines 3 and 4: the plunge and the
+    # pass over it), and the stock above Z-1.9 beside the slot is left over, 1.9 mm thick.
+    part = tmp_path / "part.obj"
+    v = [(-10, -10, -10), (40, -10, -10), (40, 10, -10), (-10, 10, -10),
+         (-10, -10, -1.9), (40, -10, -1.9), (40, 10, -1.9), (-10, 10, -1.9)]
+    f = [(1, 4, 3, 2), (5, 6, 7, 8), (1, 2, 6, 5), (2, 3, 7, 6), (3, 4, 8, 7), (4, 1, 5, 8)]
+    part.write_text("".join("v %g %g %g\n" % p for p in v) +
+                    "".join("f %d %d %d %d\n" % q for q in f))
+    r = engage.run(program=slot, tool="flat", diameter="6mm", stock=BOX, part=str(part),
+                   voxel="0.25mm")
+    gouges = r.summary["part"]["gouges"]
+    assert gouges["count"] == 1
+    g = gouges["regions"][0]
+    # Depth within a tenth of the 0.25 mm cell; volume within 1 % of 0.1 x (30 x 6 + 9 pi).
+    assert abs(g["depth"] - 0.1) <= 0.025
+    assert g["volume"] == pytest.approx(0.1 * (30 * 6 + 9 * math.pi), rel=0.01)
+    assert {line["line"] for line in g["lines"]} <= {3, 4}
+    assert r.summary["part"]["leftovers"]["thickest"] == pytest.approx(1.9, abs=0.025)
