@@ -65,7 +65,7 @@ TriangleMesh rotated(TriangleMesh m, double angle, double cx, double cy) {
 
 }  // namespace
 
-TEST_CASE("part: a closed mesh's area\\, volume and signed distance; open meshes refused",
+TEST_CASE("part: a closed mesh's area and volume and its signed distance and open meshes refused",
           "[part]") {
   const Part p(block(0, 0, -10, 40, 20, 0));
   CHECK(p.area() == Approx(2 * (40 * 20 + 40 * 10 + 20 * 10)).epsilon(1e-12));

@@ -159,3 +159,33 @@ TEST_CASE("a job another process holds is left to it, a stale lock of a dead pro
   CHECK_FALSE(fs::exists(owner));  // released when the job ended
   ::unsetenv("ENGAGE_LOCK_FILES");
 }
+
+TEST_CASE("a batch job that gouges its part ran to its end: status gouge, counted apart",
+          "[run][part]") {
+  // The slot program cuts 2 mm deep; the part (relative to the manifest) is the box below
+  // Z-1.9: its floor is gouged 0.1 mm, deeper than the 0.05 mm tolerance.
+  test::TempFolder dir("batch_part");
+  dir.write("slot.ngc", test::slotProgram());
+  dir.write("part.obj",
+            "v -10 -10 -10\nv 40 -10 -10\nv 40 10 -10\nv -10 10 -10\nv -10 -10 -1.9\n"
+            "v 40 -10 -1.9\nv 40 10 -1.9\nv -10 10 -1.9\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\n"
+            "f 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n");
+  const std::string manifest = dir.write("m.json", R"({
+    "defaults": {"tool": "flat", "diameter": "6mm", "stock": "box:-10,-10,-10,40,10,0",
+                 "outputs": "summary"},
+    "jobs": [{"name": "gouged", "program": "slot.ngc", "part": "part.obj"},
+             {"name": "plain", "program": "slot.ngc"}]})");
+  BatchOptions o;
+  o.manifest = manifest;
+  o.out = (dir.path() / "out").string();
+  o.quiet = true;
+  const BatchReport report = runBatch(o);
+  CHECK(report.failures.empty());
+  REQUIRE(report.gouges.size() == 1);
+  CHECK_THAT(report.gouges[0], Contains("job gouged: 1 gouge(s)"));
+  CHECK_THAT(report.text, Contains("(1 ok, 0 with collisions, 1 gouged their part, 0 failed)"));
+  std::ifstream in(dir.path() / "out" / "jobs" / "gouged" / "job.json");
+  const auto record = nlohmann::json::parse(in);
+  CHECK(record["status"] == "gouge");
+  CHECK(record["gouges"] == 1);
+}

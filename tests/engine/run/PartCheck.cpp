@@ -6,6 +6,7 @@
 
 #include "cutters/Error.h"
 #include "engine/run/Pipeline.h"
+#include "engine/run/RunOutputs.h"
 #include "engine/run/Summary.h"
 #include "tests/engine/run/RunTestSupport.h"
 #include "tests/support/PartMeshes.h"
@@ -13,6 +14,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
@@ -130,4 +132,35 @@ TEST_CASE("the part option refuses what it cannot compare", "[part][run]") {
   const std::string openFile = dir.write("open.obj", test::objText(open));
   CHECK_THROWS_WITH(runJob(makeJob(JobCommand::Simulate, facingJob(program, openFile))),
                     Catch::Contains("not closed"));
+}
+
+TEST_CASE("a part from a .vdb level set: a run's own final stock is its part", "[part][run]") {
+  // The facing run's stock.vdb holds its surface as a level set (within 0.2 of a cell of the
+  // fractions' surface away from edges, docs/outputs.md): taken as the part, the same run's
+  // final stock deviates from it by less than a third of the 0.5 mm cell on its faces, the
+  // deep pass's strip included: no gouge, and no leftover at 0.17 mm but along the block's
+  // edges, which the level set rounds (0.37 mm there).
+  test::TempFolder dir("part_check_vdb");
+  int deepLine = 0;
+  const std::string program = dir.write("facing.ngc", facingProgram(-3.3, deepLine));
+  OptionValues first = facingJob(program, "");
+  first.erase("part");
+  first["stock-model"] = "voxel";
+  first["out"] = (dir.path() / "first").string();
+  runIntoFolder(makeJob(JobCommand::Simulate, first));
+  OptionValues again = facingJob(program, (dir.path() / "first" / "stock.vdb").string());
+  again["stock-model"] = "voxel";
+  again["tolerance"] = "0.17mm";
+  again["allowance"] = "0.17mm";
+  const RunResult r = runJob(makeJob(JobCommand::Simulate, again));
+  REQUIRE(r.part.done);
+  CHECK(r.part.gouges.empty());
+  for (const DeviationRegion& left : r.part.leftovers) {
+    const Eigen::Vector3d& p = left.at;
+    const double fromSide = std::min({p.x(), 60 - p.x(), p.y(), 60 - p.y(), p.z() + 10});
+    CHECK(fromSide < 0.5);
+  }
+  // The part's volume: the block below Z-3 less the deep pass's strip, 60 x 60 x 7 mm less
+  // 0.3 x 600 mm^3 (the mesh of the level set within a cell's rounding: 0.5 %).
+  CHECK(r.part.partVolume == Approx(60 * 60 * 7 - 0.3 * 600).epsilon(0.005));
 }
