@@ -195,7 +195,7 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     r["peak_mrr_line"] = peakLine;
     r["cutting_time_s"] = sim.cuttingTime;
     r["collisions"] = sim.collisions.size();
-    r["gouges"] = out.part.done ? ordered_json(out.part.gouges.size()) : ordered_json();
+    if (out.part.done) r["gouges"] = out.part.gouges.size();
     const bool scheduled = out.job.scheduling();
     r["feed_time_before_s"] = scheduled ? ordered_json(out.plan.timeBefore) : ordered_json();
     r["feed_time_after_s"] = scheduled ? ordered_json(out.plan.timeAfter) : ordered_json();
@@ -212,7 +212,7 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     r["error"] = e.what();
     for (const char* key :
          {"moves", "steps", "removed_mm3", "peak_mrr_mm3_min", "peak_mrr_line", "cutting_time_s",
-          "collisions", "gouges", "feed_time_before_s", "feed_time_after_s", "saving_relative"})
+          "collisions", "feed_time_before_s", "feed_time_after_s", "saving_relative"})
       r[key] = nullptr;
     r["warnings"] = ordered_json::array();
     // A failed job keeps nothing but its record.
@@ -463,10 +463,16 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
       q += c == '"' ? std::string("\"\"") : std::string(1, c);
     return q + "\"";
   };
+  // A gouges column where some job compared its stock with a --part (a batch without one
+  // keeps its table as it was).
+  bool parts = false;
+  for (const ordered_json& r : records)
+    parts = parts || (r.contains("gouges") && !r["gouges"].is_null());
   std::string csv = "job,name,command,program,status,run_time_s,moves,steps,removed_" + V +
                     ",peak_mrr_" + Q +
                     ",peak_mrr_line,cutting_time_s,feed_time_before_s,feed_time_after_s,"
-                    "saving_relative,collisions,gouges,warnings,error\n";
+                    "saving_relative,collisions," +
+                    std::string(parts ? "gouges," : "") + "warnings,error\n";
   ordered_json summary = ordered_json::array();
   std::size_t ok = 0, collided = 0, gouged = 0;
   for (const ordered_json& r : records) {
@@ -483,7 +489,8 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
            value(r["peak_mrr_mm3_min"], Dimension::VolumeRate) + "," + plain(r["peak_mrr_line"]) +
            "," + plain(r["cutting_time_s"]) + "," + plain(r["feed_time_before_s"]) + "," +
            plain(r["feed_time_after_s"]) + "," + plain(r["saving_relative"]) + "," +
-           plain(r["collisions"]) + "," + plain(r.value("gouges", ordered_json())) + "," +
+           plain(r["collisions"]) + "," +
+           (parts ? plain(r.value("gouges", ordered_json())) + "," : std::string()) +
            quote(warnings) + "," +
            quote(r["error"].is_null() ? "" : r["error"].get<std::string>()) + "\n";
     ordered_json s = r;
