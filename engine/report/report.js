@@ -318,7 +318,9 @@
                                  var lines = el('span');
                                  r.lines.forEach(function (l, k) {
                                    var text = (data.part_lines || {})[(data.sources || []).indexOf(l.file) + ':' + l.line] || '';
-                                   lines.appendChild(el('div', null, el('b', {text: l.file.split('/').pop() + ':' + l.line}),
+                                   var link = el('a', {href: '#step=' + l.first_step, text: l.file.split('/').pop() + ':' + l.line});
+                                   link.addEventListener('click', function () { selectNearestStep(l.first_step); });
+                                   lines.appendChild(el('div', null, el('b', null, link),
                                                         ' ', el('code', {text: text}), ' (', num(p + 'lines.' + k + '.floor_area', U.area), ')'));
                                  });
                                  return [String(i + 1), num(p + 'depth', U.length), num(p + 'area', U.area),
@@ -741,12 +743,16 @@
     renderFiles();
     // report.html#step=N opens with step N (or the nearest plotted one) selected.
     var m = /step=(\d+)/.exec(location.hash);
-    if (m && rows) {
-      var want = Number(m[1]), row = 0;
-      for (var i = 0; i < rows; ++i)
-        if (Math.abs(series.step[i] - want) < Math.abs(series.step[row] - want)) row = i;
-      showStep(series, row, false);
-    }
+    if (m) selectNearestStep(Number(m[1]));
+  }
+
+  // Select step `want`, or the nearest plotted one.
+  function selectNearestStep(want) {
+    if (!rows) return;
+    var row = 0;
+    for (var i = 0; i < rows; ++i)
+      if (Math.abs(series.step[i] - want) < Math.abs(series.step[row] - want)) row = i;
+    showStep(series, row, false);
   }
 
   function painted(canvas) {
