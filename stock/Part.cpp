@@ -242,7 +242,8 @@ std::size_t Part::sampleCount(double spacing) const {
 
 std::vector<SampleDeviation> measureDeviation(const Part& part,
                                               const std::vector<PartSample>& samples,
-                                              const Stock& stock, const Box3* holds) {
+                                              const Stock& stock, const Box3* holds,
+                                              const std::function<bool()>& stop) {
   const double h = stock.resolution();
   const double stepLength = 0.5 * h, precision = 1e-4 * h;
   // Outside the stock's bounds is air; the inward walk ends at the part's bounds at the latest
@@ -252,6 +253,7 @@ std::vector<SampleDeviation> measureDeviation(const Part& part,
   std::vector<SampleDeviation> out(samples.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 512),
                     [&](const tbb::blocked_range<std::size_t>& r) {
+                      if (stop && stop()) return;
                       const std::unique_ptr<MaterialReader> reader = stock.materialReader();
                       std::vector<Eigen::Vector3d> one(1);
                       auto material = [&](const Eigen::Vector3d& p) {

@@ -19,6 +19,7 @@
 #include <Eigen/Geometry>
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -93,11 +94,14 @@ class Part {
 /// the sample lies in material, inward where in air) in steps of half a cell to the first
 /// change, found by bisection to 1e-4 of a cell, cut at the part's medial axis (checked at
 /// distances doubling from two cells, then by bisection). The same whatever the thread
-/// count. `holds`: no material lies outside this box (a box stock's, exactly: a stock's
-/// bounds are rounded out to its cells, and its reading near them is a fraction of a cell off).
+/// count. `stop`, asked every few thousand samples: when it says true the rest is left
+/// unmeasured (the caller throws). `holds`: no material lies outside this box (a box stock's,
+/// exactly: a stock's bounds are rounded out to its cells, and its reading near them is a fraction
+/// of a cell off).
 std::vector<SampleDeviation> measureDeviation(const Part& part,
                                               const std::vector<PartSample>& samples,
-                                              const Stock& stock, const Box3* holds = nullptr);
+                                              const Stock& stock, const Box3* holds = nullptr,
+                                              const std::function<bool()>& stop = {});
 
 /// The mesh of a .vdb level set's zero surface (PartFiles.cpp). Throws as Part::fromFile.
 TriangleMesh levelSetMesh(const std::string& path);

@@ -133,7 +133,8 @@ void refineEdges(const Part& part, const Stock& stock, const Box3* holds, const 
       keptDev.push_back(dev[i]);
     }
   }
-  const std::vector<SampleDeviation> finerDev = measureDeviation(part, finer, stock, holds);
+  const std::vector<SampleDeviation> finerDev =
+      measureDeviation(part, finer, stock, holds, stopRequested);
   kept.insert(kept.end(), finer.begin(), finer.end());
   keptDev.insert(keptDev.end(), finerDev.begin(), finerDev.end());
   samples = std::move(kept);
@@ -224,7 +225,7 @@ PartCheck checkPart(const Part& part, const PartSpec& spec, const Stock& stock,
     c.spacing *= 1.05 * std::sqrt(static_cast<double>(n) / static_cast<double>(kMaxPartSamples));
   std::vector<PartSample> samples = part.samples(c.spacing);
   if (stopRequested()) throw Interrupted();
-  std::vector<SampleDeviation> dev = measureDeviation(part, samples, stock, holds);
+  std::vector<SampleDeviation> dev = measureDeviation(part, samples, stock, holds, stopRequested);
   if (stopRequested()) throw Interrupted();
   // Pieces of the surface whose centres lie within one and a half samples are neighbours
   // (pieces sharing an edge lie within one).
