@@ -288,18 +288,21 @@ std::vector<SampleDeviation> measureDeviation(const Part& part,
                           }
                         }
                         double t = lo;
+                        // The stock's surface: a change met, or a box stock's face where the
+                        // material reaches it (not air up to the part's bounds: no surface).
+                        const bool met = hi > 0.0 || (!pastShare && inMaterial);
                         if (hi > 0.0) {
                           while (hi - lo > precision) {
                             const double mid = 0.5 * (lo + hi);
                             (material(q + mid * dir) == inMaterial ? lo : hi) = mid;
                           }
                           t = 0.5 * (lo + hi);
-                          // A hundredth of a cell is as good as none, whatever the share (a query
-                          // saved at every sample of a surface cut where the part has it).
-                          pastShare = t > 0.01 * h && beyondShare(t);
                         }
+                        // A hundredth of a cell is as good as none, whatever the share (a query
+                        // saved at every sample of a surface cut where the part has it).
+                        if (!pastShare) pastShare = t > 0.01 * h && beyondShare(t);
                         SampleDeviation& d = out[i];
-                        d.surfaceMet = hi > 0.0 && !pastShare;
+                        d.surfaceMet = met && !pastShare;
                         d.stockPoint = (q + t * dir).cast<float>();
                         if (pastShare) t = shareEnd(part, q, dir, t, precision);
                         d.deviation = static_cast<float>(inMaterial ? t : -t);
