@@ -119,6 +119,7 @@ struct Part::Impl {
   std::unique_ptr<Side> side;
   Box3 bounds;
   double area = 0.0;
+  double volume = 0.0;
 };
 
 Part Part::fromFile(const std::string& path) {
@@ -136,13 +137,13 @@ Part::Part(TriangleMesh mesh, const std::string& name) : impl_(std::make_unique<
     throw ParameterError(name + ": the part is not closed (" + std::to_string(open) +
                          " edges belong to one triangle only): its inside is not defined");
   // Outward normals: a closed mesh wound the other way (a negative volume) is turned over.
-  double volume = 0.0;
+  Impl& m = *impl_;
   for (const auto& t : mesh.triangles)
-    volume += corner(mesh, t[0]).dot(corner(mesh, t[1]).cross(corner(mesh, t[2])));
-  if (volume < 0.0)
+    m.volume += corner(mesh, t[0]).dot(corner(mesh, t[1]).cross(corner(mesh, t[2]))) / 6.0;
+  if (m.volume < 0.0)
     for (auto& t : mesh.triangles)
       std::swap(t[1], t[2]);
-  Impl& m = *impl_;
+  m.volume = std::abs(m.volume);
   std::vector<SurfaceMesh::Vertex_index> vertex;
   vertex.reserve(mesh.points.size());
   m.bounds.min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
@@ -181,6 +182,9 @@ Box3 Part::bounds() const {
 }
 double Part::area() const {
   return impl_->area;
+}
+double Part::volume() const {
+  return impl_->volume;
 }
 
 double Part::distance(const Eigen::Vector3d& p) const {

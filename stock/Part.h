@@ -70,6 +70,8 @@ class Part {
   Box3 bounds() const;
   /// Area of the surface, mm^2.
   double area() const;
+  /// Volume inside, mm^3.
+  double volume() const;
   /// Distance from p to the part's surface, mm.
   double distance(const Eigen::Vector3d& p) const;
   /// The same, given a point of the part's surface near p (a sample's centre: the search

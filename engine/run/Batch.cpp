@@ -457,12 +457,6 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
   auto plain = [](const ordered_json& v) {
     return v.is_null() ? std::string() : formatNumber(v.get<double>());
   };
-  auto quote = [](std::string s) {
-    std::string q = "\"";
-    for (char c : s)
-      q += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return q + "\"";
-  };
   // A gouges column where some job compared its stock with a --part (a batch without one
   // keeps its table as it was).
   bool parts = false;
@@ -482,8 +476,8 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
     ok += r["status"] == "ok";
     collided += r["status"] == "collision";
     gouged += r["status"] == "gouge";
-    csv += std::to_string(r["index"].get<std::size_t>() + 1) + "," + quote(r["name"]) + "," +
-           r["command"].get<std::string>() + "," + quote(r["program"]) + "," +
+    csv += std::to_string(r["index"].get<std::size_t>() + 1) + "," + csvQuoted(r["name"]) + "," +
+           r["command"].get<std::string>() + "," + csvQuoted(r["program"]) + "," +
            r["status"].get<std::string>() + "," + plain(r["run_time_s"]) + "," + plain(r["moves"]) +
            "," + plain(r["steps"]) + "," + value(r["removed_mm3"], Dimension::Volume) + "," +
            value(r["peak_mrr_mm3_min"], Dimension::VolumeRate) + "," + plain(r["peak_mrr_line"]) +
@@ -491,8 +485,8 @@ std::string mergeRecords(const std::vector<ManifestJob>& all, const fs::path& ou
            plain(r["feed_time_after_s"]) + "," + plain(r["saving_relative"]) + "," +
            plain(r["collisions"]) + "," +
            (parts ? plain(r.value("gouges", ordered_json())) + "," : std::string()) +
-           quote(warnings) + "," +
-           quote(r["error"].is_null() ? "" : r["error"].get<std::string>()) + "\n";
+           csvQuoted(warnings) + "," +
+           csvQuoted(r["error"].is_null() ? "" : r["error"].get<std::string>()) + "\n";
     ordered_json s = r;
     s.erase("spec");
     summary.push_back(s);

@@ -17,6 +17,13 @@
 
 namespace engage {
 
+std::string csvQuoted(const std::string& text) {
+  std::string out = "\"";
+  for (char ch : text)
+    out += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return out + "\"";
+}
+
 void writeAtomically(const std::filesystem::path& path, const std::string& text) {
   writeFileAtomically(path.string(), [&](std::ostream& os) { os << text; });
 }

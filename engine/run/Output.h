@@ -1,7 +1,7 @@
 #pragma once
 /// \file Output.h
 /// Writing output files so that nothing is ever half-written: the text goes to a temporary
-/// name beside the target and is renamed when complete.
+/// name beside the target and is renamed when complete; a CSV field quoted.
 
 #include <filesystem>
 #include <string>
@@ -11,6 +11,9 @@ namespace engage {
 
 /// Write `text` to `path` through `path.part`; throws Error naming the file when it fails.
 void writeAtomically(const std::filesystem::path& path, const std::string& text);
+
+/// A CSV field: `text` in double quotes, its quotes doubled (RFC 4180).
+std::string csvQuoted(const std::string& text);
 
 /// An output folder, made with its missing parents when a run starts (so that a folder that
 /// cannot be made or written fails before any work, with one clear line). If the run then

@@ -3,6 +3,7 @@
 #include "cutters/Error.h"
 #include "cutters/Numbers.h"
 #include "engine/report/SurfaceSteps.h"
+#include "engine/run/Output.h"
 
 #include <algorithm>
 #include <array>
@@ -145,7 +146,7 @@ void refineEdges(const Part& part, const Stock& stock, const Box3* holds, const 
 std::vector<DeviationRegion> regionsOf(const std::vector<PartSample>& samples,
                                        const std::vector<SampleDeviation>& dev, bool gouge,
                                        double limit, double reach, double smallest,
-                                       std::vector<long>& regionOfSample) {
+                                       std::vector<long>* regionOfSample = nullptr) {
   std::vector<char> flagged(samples.size(), 0);
   for (std::size_t i = 0; i < samples.size(); ++i)
     flagged[i] = gouge ? dev[i].deviation < -limit : dev[i].deviation > limit;
@@ -180,18 +181,12 @@ std::vector<DeviationRegion> regionsOf(const std::vector<PartSample>& samples,
     index[r] = static_cast<long>(out.size());
     out.push_back(std::move(region));
   }
-  regionOfSample.assign(samples.size(), -1);
-  for (std::size_t i = 0; i < samples.size(); ++i)
-    if (root[i] >= 0 && index.count(root[i])) regionOfSample[i] = index[root[i]];
+  if (regionOfSample) {
+    regionOfSample->assign(samples.size(), -1);
+    for (std::size_t i = 0; i < samples.size(); ++i)
+      if (root[i] >= 0 && index.count(root[i])) (*regionOfSample)[i] = index[root[i]];
+  }
   return out;
-}
-
-/// A CSV field in quotes, its quotes doubled.
-std::string csvQuoted(const std::string& text) {
-  std::string out = "\"";
-  for (char ch : text)
-    out += ch == '"' ? std::string("\"\"") : std::string(1, ch);
-  return out + "\"";
 }
 
 }  // namespace
@@ -217,6 +212,7 @@ PartCheck checkPart(const Part& part, const PartSpec& spec, const Stock& stock,
   PartCheck c;
   c.spec = spec;
   c.area = part.area();
+  c.partVolume = part.volume();
   const double h = stock.resolution();
   // Pieces whose longest edge is a cell's diagonal: right triangles with legs of a cell at most.
   c.spacing = std::sqrt(2.0) * h;
@@ -238,11 +234,11 @@ PartCheck checkPart(const Part& part, const PartSpec& spec, const Stock& stock,
       c.stockPoints.push_back(d.stockPoint);
       c.deviation.push_back(d.deviation);
     }
-  std::vector<long> gougeOf, leftoverOf;
+  std::vector<long> gougeOf;  // per sample, its gouge (-1: none)
   // A region smaller than a cell's face is below what the stock resolves (a voxel stock's
   // reading at a convex edge can be a few hundredths of a cell off over such a patch).
-  c.gouges = regionsOf(samples, dev, true, spec.tolerance, reach, h * h, gougeOf);
-  c.leftovers = regionsOf(samples, dev, false, spec.allowance, reach, h * h, leftoverOf);
+  c.gouges = regionsOf(samples, dev, true, spec.tolerance, reach, h * h, &gougeOf);
+  c.leftovers = regionsOf(samples, dev, false, spec.allowance, reach, h * h);
   // Which steps cut each gouge. Where the stock's surface was met, its floor: the steps whose
   // swept surface passes within a quarter of the tolerance of it (at most a quarter of a cell:
   // the stock's surface is read to a fraction of one; a neighbouring pass at the right depth
@@ -283,15 +279,6 @@ PartCheck checkPart(const Part& part, const PartSpec& spec, const Stock& stock,
     (s.empty() ? c.missing : gouges).push_back(std::move(c.gouges[g]));
   }
   c.gouges = std::move(gouges);
-  double volume = 0.0;
-  const TriangleMesh& m = part.mesh();
-  for (const auto& t : m.triangles) {
-    const Eigen::Vector3d a(m.points[t[0]][0], m.points[t[0]][1], m.points[t[0]][2]),
-        b(m.points[t[1]][0], m.points[t[1]][1], m.points[t[1]][2]),
-        d(m.points[t[2]][0], m.points[t[2]][1], m.points[t[2]][2]);
-    volume += a.dot(b.cross(d)) / 6.0;
-  }
-  c.partVolume = std::abs(volume);
   c.done = true;
   c.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return c;

@@ -26,6 +26,14 @@ namespace {
 
 constexpr double kH = 0.25;  // the cell, mm
 
+/// The box from `low` to `high`.
+Box3 boxOf(const Eigen::Vector3d& low, const Eigen::Vector3d& high) {
+  Box3 b;
+  b.min = low;
+  b.max = high;
+  return b;
+}
+
 /// Cut a straight pass from a to b in steps of 2.5 cells.
 void pass(Stock& stock, const AptCutter& c, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const int n = static_cast<int>(std::ceil((b - a).norm() / (2.5 * kH)));
@@ -97,10 +105,7 @@ TEST_CASE("part: a slot cut 0.1 mm too deep gouges its floor by 0.1 mm", "[part]
   const Part part(slottedBlock(0, 0, -10, 40, 40, 0, 17, 23, -5));
   for (const std::string model : {"dexel", "voxel"}) {
     INFO(model);
-    Box3 box;
-    box.min = {0, 0, -10};
-    box.max = {40, 40, 0};
-    const auto stock = boxStock(model, box, kH);
+    const auto stock = boxStock(model, boxOf({0, 0, -10}, {40, 40, 0}), kH);
     pass(*stock, AptCutter::flat(6, 20), {-5, 20, -5.1}, {45, 20, -5.1});
     const std::vector<PartSample> samples = part.samples(std::sqrt(2.0) * kH);
     const std::vector<SampleDeviation> dev = measureDeviation(part, samples, *stock);
@@ -134,10 +139,7 @@ TEST_CASE("part: a slot wall left 0.2 mm thick, along the grid and at 30 deg to 
     };
     for (const std::string model : {"dexel", "voxel"}) {
       INFO(model << " at " << angle * 180 / kPi << " deg");
-      Box3 box;
-      box.min = {-10, -10, -10};
-      box.max = {50, 50, 0};
-      const auto stock = boxStock(model, box, kH);
+      const auto stock = boxStock(model, boxOf({-10, -10, -10}, {50, 50, 0}), kH);
       const Eigen::Vector3d a = middle - 25 * along + 0.1 * across - Eigen::Vector3d(0, 0, 5);
       pass(*stock, AptCutter::flat(5.8, 20), a, a + 50 * along);
       const std::vector<PartSample> samples = part.samples(std::sqrt(2.0) * kH);
@@ -167,10 +169,7 @@ TEST_CASE("part: a ball finish's scallops are as high as R - sqrt(R^2 - s^2 / 4)
   const Part part(block(0, 0, -10, 40, 40, 0));
   for (const std::string model : {"dexel", "voxel"}) {
     INFO(model);
-    Box3 box;
-    box.min = {0, 0, -10};
-    box.max = {40, 40, 1};
-    const auto stock = boxStock(model, box, kH);
+    const auto stock = boxStock(model, boxOf({0, 0, -10}, {40, 40, 1}), kH);
     for (double y = -3.7; y < 44; y += s)  // the passes at y = 0.3 + k: cusps off the grid
       pass(*stock, AptCutter::ball(2 * R, 20), {-5, y, 0}, {45, y, 0});
     const std::vector<PartSample> samples = part.samples(std::sqrt(2.0) * kH);
