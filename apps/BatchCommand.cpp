@@ -40,9 +40,9 @@ void addBatchCommands(CLI::App& app, std::function<int()>& run) {
   cmd->add_option("--threads", o->threads,
                   "CPUs to use in all (default: those this process may use: its affinity "
                   "mask and cgroup quota)");
-  cmd->add_option("--memory", o->memory,
-                  "memory the jobs side by side may hold, e.g. 8GB (default: 80 % of the "
-                  "available memory, within the cgroup's limit)");
+  cmd->add_option("--max-memory,--memory", o->memory,
+                  "memory the jobs side by side may hold, e.g. 8GB (default: 80 % of what this "
+                  "process may use: the available memory, the cgroup's limit, ulimit -v)");
   cmd->add_flag("--retry-failed", o->retryFailed, "run failed jobs again");
   cmd->add_option("--job", o->job,
                   "run this job alone (by name; for workflow rules, then `engage merge`)");

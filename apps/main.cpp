@@ -6,8 +6,11 @@
 /// 5 a simulate, schedule or batch run completed but a rapid, a shank or a holder met material,
 /// 6 a schedule's limit cannot be met, 7 a simulate, schedule or batch run completed but gouged
 /// its --part deeper than --tolerance (5 where both),
+/// 8 out of memory (what was being written is removed; earlier outputs stay),
 /// 130 interrupted (SIGINT or SIGTERM: the run stops at its next step and removes what it made,
-/// as a failed run does; a second signal ends the process at once).
+/// as a failed run does; a stage that does not stop by itself within half a second, such as
+/// OpenVDB's meshing, is ended there with what it was writing removed; a second signal ends
+/// the process at once).
 
 #include "apps/AnalyzeCommand.h"
 #include "apps/BatchCommand.h"
@@ -20,24 +23,102 @@
 #include "engine/schedule/FeedScheduler.h"
 #include "engine/sim/Simulation.h"
 
+#include "stock/AtomicFile.h"
+
 #include <CLI/CLI.hpp>
 
 #include <link.h>
+#include <semaphore.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <csignal>
+#include <cstdlib>
 #include <exception>
 #include <functional>
 #include <iostream>
+#include <new>
 #include <string>
+#include <thread>
 
 namespace {
+
+/// Posted by the first stop signal, for the thread that ends a run that does not stop.
+sem_t stopPosted;
 
 /// The first SIGINT or SIGTERM asks the run to stop; the next one ends the process.
 extern "C" void onStopSignal(int sig) {
   engage::requestStop();
+  sem_post(&stopPosted);
   std::signal(sig, SIG_DFL);
+}
+
+/// Writes `text` to stderr without allocating (for the ends below, where memory may be gone).
+void say(const char* text) {
+  std::size_t n = 0;
+  while (text[n] != '\0')
+    ++n;
+  while (n > 0) {
+    const ssize_t w = ::write(2, text, n);
+    if (w <= 0) return;
+    text += w;
+    n -= static_cast<std::size_t>(w);
+  }
+}
+
+constexpr const char* kInterrupted =
+    "engage: interrupted: the run stopped and removed what it had made\n";
+constexpr const char* kOutOfMemory =
+    "engage: out of memory: the run needed more than this process may use (what it was "
+    "writing is removed); use a coarser --voxel, --outputs summary, or more memory "
+    "(--max-memory, the job's memory limit)\n";
+
+/// How long a run has after a stop signal to stop by itself: every step and every output
+/// checks for it, but a stage inside a library that cannot be asked to stop (OpenVDB's
+/// meshing of a large stock takes tens of seconds) is ended then, by this thread: what is
+/// being written is removed (removeUnfinished) and the process exits 130 at once.
+constexpr auto kStopGrace = std::chrono::milliseconds(500);
+
+void endUnstoppedRun() {
+  while (sem_wait(&stopPosted) != 0) {
+  }
+  std::this_thread::sleep_for(kStopGrace);
+  engage::removeUnfinished();
+  say(kInterrupted);
+  std::_Exit(130);
+}
+
+/// Address space held back for the end of a run out of memory: given back at the first failed
+/// allocation (which is then tried again), so that the run can unwind, remove what it was
+/// writing and say why; the next failure throws std::bad_alloc.
+char* memoryReserve = nullptr;
+
+void onAllocationFailure() {
+  if (memoryReserve) {
+    delete[] memoryReserve;
+    memoryReserve = nullptr;
+    return;
+  }
+  std::set_new_handler(nullptr);  // the next failure throws
+}
+
+/// An exception that could not be thrown on (out of memory in a destructor or a thread
+/// without a catch): what was being written is removed; out of memory exits 8, anything else
+/// aborts as before.
+[[noreturn]] void onTerminate() {
+  engage::removeUnfinished();
+  if (const std::exception_ptr e = std::current_exception()) {
+    try {
+      std::rethrow_exception(e);
+    } catch (const std::bad_alloc&) {
+      say(kOutOfMemory);
+      std::_Exit(8);
+    } catch (...) {
+    }
+  }
+  say("engage: internal error: the process ended unexpectedly\n");
+  std::abort();
 }
 
 /// Gives back the pages of a shared library's first read-only segment (its ELF header, symbol
@@ -97,7 +178,7 @@ constexpr const char* kExitStatuses =
     "3 internal error; 4 a batch ran but some of its jobs failed; 5 the run completed but a "
     "rapid, a shank or a holder met material; 6 a schedule's limit cannot be met at the lowest "
     "feed (nothing written); 7 the run completed but gouged its --part deeper than --tolerance "
-    "(5 where both); 130 interrupted.\n";
+    "(5 where both); 8 out of memory; 130 interrupted.\n";
 
 }  // namespace
 
@@ -128,13 +209,21 @@ int main(int argc, char** argv) {
               << " --help)\n";
     return 2;
   }
+  memoryReserve = new char[64 << 20];
+  std::set_new_handler(onAllocationFailure);
+  std::set_terminate(onTerminate);
+  sem_init(&stopPosted, 0, 0);
+  std::thread(endUnstoppedRun).detach();
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
   try {
     return run ? run() : 2;
   } catch (const engage::Interrupted&) {
-    std::cerr << "engage: interrupted: the run stopped and removed what it had made\n";
+    say(kInterrupted);
     return 130;
+  } catch (const std::bad_alloc&) {
+    say(kOutOfMemory);
+    return 8;
   } catch (const engage::UnmetLimitError& e) {
     std::cerr << "engage: error: " << e.what() << '\n';
     return 6;

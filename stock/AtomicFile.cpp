@@ -2,16 +2,60 @@
 
 #include "cutters/Error.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
+#include <mutex>
+#include <vector>
 
 namespace engage {
+namespace {
+
+std::mutex& registryMutex() {
+  static std::mutex m;
+  return m;
+}
+
+std::vector<std::filesystem::path>& registry() {
+  static std::vector<std::filesystem::path> paths;
+  return paths;
+}
+
+}  // namespace
+
+Unfinished::Unfinished(std::filesystem::path path) : path_(std::move(path)) {
+  const std::lock_guard<std::mutex> lock(registryMutex());
+  registry().push_back(path_);
+}
+
+Unfinished::~Unfinished() {
+  release();
+}
+
+void Unfinished::release() {
+  if (!registered_) return;
+  registered_ = false;
+  const std::lock_guard<std::mutex> lock(registryMutex());
+  auto& paths = registry();
+  const auto it = std::find(paths.rbegin(), paths.rend(), path_);
+  if (it != paths.rend()) paths.erase(std::next(it).base());
+}
+
+void removeUnfinished() noexcept {
+  const std::lock_guard<std::mutex> lock(registryMutex());
+  for (const std::filesystem::path& p : registry()) {
+    std::error_code ec;
+    // A file may still be appearing in a folder being removed: a second pass takes it.
+    for (int pass = 0; pass < 3 && std::filesystem::exists(p, ec); ++pass)
+      std::filesystem::remove_all(p, ec);
+  }
+}
 
 void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
   const std::string tmp = path + ".part";
+  const Unfinished unfinished(tmp);
   std::ofstream os(tmp, std::ios::binary);
   const auto fail = [&](int error) {
     os.close();
@@ -19,7 +63,13 @@ void writeFileAtomically(const std::string& path, const std::function<void(std::
     throw Error("cannot write '" + path + "': " + std::strerror(error));
   };
   if (!os) fail(errno);
-  write(os);
+  try {
+    write(os);
+  } catch (...) {
+    os.close();
+    std::remove(tmp.c_str());
+    throw;
+  }
   os.flush();
   if (!os) fail(errno ? errno : EIO);
   os.close();

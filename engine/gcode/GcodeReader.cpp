@@ -21,7 +21,8 @@ Toolpath readPrograms(const std::vector<std::string>& paths, const ReaderOptions
     if (all.moves.size() + one.moves.size() > options.maxMoves)
       throw GcodeError(path, 1, 1,
                        "expected at most " + std::to_string(options.maxMoves) +
-                           " moves in the programs together, found more");
+                           " moves in the programs together" + options.maxMovesWhy +
+                           ", found more");
     // The first program is taken whole (not copied: a long program's moves are a large share
     // of the run's heap), the others appended.
     for (ToolLoad l : one.toolLoads) {

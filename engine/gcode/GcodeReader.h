@@ -104,6 +104,9 @@ struct ReaderOptions {
   /// beyond it.
   /// 10 million moves hold about 1.8 GB; the option --max-moves raises it.
   std::size_t maxMoves = 10'000'000;
+  /// Why maxMoves is what it is, for the error (" (what 4.0 GB holds: --max-memory)"); empty:
+  /// the option.
+  std::string maxMovesWhy;
   /// Where the tool tip starts (mm, the moves' frame) and the tool in the spindle. By
   /// default an assumption, the program origin with no tool (or the machine's start);
   /// `startKnown` says it is where the machine is (an earlier program left it, the next file of

@@ -906,8 +906,8 @@ int Interpreter::fileIndexInOutput() const {
 
 Move Interpreter::base(MoveKind kind) const {
   if (out_.moves.size() >= options_.maxMoves)
-    fail(1, "expected at most " + std::to_string(options_.maxMoves) +
-                " moves in a program, found more");
+    fail(1, "expected at most " + std::to_string(options_.maxMoves) + " moves in a program" +
+                options_.maxMovesWhy + ", found more");
   Move m;
   m.kind = kind;
   m.start = physicalStart_ ? *physicalStart_ : pos_;

@@ -5,6 +5,7 @@
 #include "cutters/Error.h"
 #include "engine/run/Job.h"
 #include "engine/run/Manifest.h"
+#include "engine/run/Memory.h"
 #include "engine/run/Output.h"
 #include "engine/run/Pipeline.h"
 #include "engine/run/RunOutputs.h"
@@ -33,6 +34,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <set>
 #include <sstream>
 #include <string>
@@ -96,61 +98,6 @@ class MemoryBudget {
   int running_ = 0;
 };
 
-/// The memory this process may use, bytes: the machine's available memory (MemAvailable),
-/// bounded by a cgroup v2 limit (memory.max less memory.current) where one is set.
-double availableMemory() {
-  double bytes = 8e9;
-  {
-    std::ifstream in("/proc/meminfo");
-    std::string key;
-    double kb = 0.0;
-    while (in >> key >> kb) {
-      if (key == "MemAvailable:") {
-        bytes = kb * 1024.0;
-        break;
-      }
-      in.ignore(256, '\n');
-    }
-  }
-  std::string max;
-  double current = 0.0;
-  if (std::ifstream("/sys/fs/cgroup/memory.max") >> max && max != "max" &&
-      std::ifstream("/sys/fs/cgroup/memory.current") >> current)
-    bytes = std::min(bytes, std::atof(max.c_str()) - current);
-  return std::max(bytes, 0.0);
-}
-
-/// "8GB", "512MB", "2GiB", "1.5G", "4000000000" as bytes. Throws ParameterError.
-double parseMemory(const std::string& text) {
-  std::size_t used = 0;
-  double v = 0.0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  std::string unit = text.substr(used);
-  std::transform(unit.begin(), unit.end(), unit.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-  static const std::pair<const char*, double> units[] = {{"", 1.0},
-                                                         {"B", 1.0},
-                                                         {"K", 1e3},
-                                                         {"KB", 1e3},
-                                                         {"KIB", 1024.0},
-                                                         {"M", 1e6},
-                                                         {"MB", 1e6},
-                                                         {"MIB", 1048576.0},
-                                                         {"G", 1e9},
-                                                         {"GB", 1e9},
-                                                         {"GIB", 1073741824.0},
-                                                         {"T", 1e12},
-                                                         {"TB", 1e12},
-                                                         {"TIB", 1099511627776.0}};
-  for (const auto& [name, factor] : units)
-    if (used > 0 && unit == name && std::isfinite(v) && v > 0.0) return v * factor;
-  throw ParameterError("--memory: expected an amount such as 8GB or 512MB, found '" + text + "'");
-}
-
 /// Run one job into DIR/jobs/NAME (through NAME.partial, renamed when complete) and return
 /// its record. A job's failure is its record; it never stops the batch. `blocked` non-empty:
 /// the job cannot run (its stock's job failed), and that is its record.
@@ -158,6 +105,7 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
                     MemoryBudget& memory, const std::string& blocked) {
   const fs::path partial = jobs / (job.name + ".partial"), done = jobs / job.name;
   fs::remove_all(partial);
+  Unfinished unfinished(partial);
   fs::create_directories(partial);
   const ordered_json spec = ordered_json::parse(job.specJson);
   ordered_json r;
@@ -175,7 +123,7 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     if (!job.stockFrom.empty()) values["stock"] = (jobs / job.stockFrom / "stock.vdb").string();
     Job made = makeJob(job.command, values);
     made.keepStock = job.feedsStock;
-    const MemoryBudget::Ticket reserved(memory, memoryEstimate(made), job.name);
+    const MemoryBudget::Ticket reserved(memory, memoryEstimate(made).total(), job.name);
     const CompletedRun run = runIntoFolder(std::move(made));
     const RunResult& out = run.result;
     const WrittenOutputs& written = run.written;
@@ -209,7 +157,9 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
     throw;
   } catch (const std::exception& e) {
     r["status"] = "failed";
-    r["error"] = e.what();
+    r["error"] = dynamic_cast<const std::bad_alloc*>(&e)
+                     ? "out of memory: the job needed more than the process could give it"
+                     : e.what();
     for (const char* key :
          {"moves", "steps", "removed_mm3", "peak_mrr_mm3_min", "peak_mrr_line", "cutting_time_s",
           "collisions", "feed_time_before_s", "feed_time_after_s", "saving_relative"})
@@ -224,6 +174,7 @@ ordered_json runOne(const ManifestJob& job, const fs::path& jobs, const std::str
   writeAtomically(partial / "job.json", r.dump(2) + "\n");
   fs::remove_all(done);
   fs::rename(partial, done);
+  unfinished.release();
   return r;
 }
 
@@ -645,7 +596,7 @@ void shardOutcomes(const std::vector<ManifestJob>& all, const Shard& shard, cons
 BatchReport runBatch(const BatchOptions& o) {
   const std::vector<ManifestJob> all = readManifest(o.manifest);
   const Shard shard = parseShard(o.shard);
-  const double memoryLimit = o.memory.empty() ? 0.0 : parseMemory(o.memory);
+  const double memoryLimit = o.memory.empty() ? 0.0 : parseMemory(o.memory, "--max-memory");
   const UnitSystem sys = unitsOf(o.units);
   checkBatchOptions(o, all);
   const fs::path out(o.out), jobs = out / "jobs";
@@ -683,7 +634,7 @@ BatchReport runBatch(const BatchOptions& o) {
   auto report = [&]() { progress.line(); };
   report();
   // Jobs side by side hold at most --memory, else 80 % of the memory available now.
-  MemoryBudget memory(memoryLimit > 0.0 ? memoryLimit : 0.8 * availableMemory());
+  MemoryBudget memory(memoryLimit > 0.0 ? memoryLimit : 0.8 * processMemoryLimit().bytes);
   std::vector<std::thread> pool;
   for (int w = 0; w < workers; ++w)
     pool.emplace_back([&]() {

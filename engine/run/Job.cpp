@@ -3,6 +3,7 @@
 #include "engine/tools/CamoticsProject.h"
 
 #include "engine/run/Machine.h"
+#include "engine/run/Memory.h"
 #include "engine/run/ProbeContact.h"
 
 #include "cutters/Error.h"
@@ -501,6 +502,16 @@ std::optional<bool> firstUnitsWord(const std::string& path) {
 
 }  // namespace
 
+namespace {
+
+/// --max-memory, bytes; 0 when not given.
+double maxMemoryOption(const OptionValues& values) {
+  const std::string text = optionText(values, "max-memory");
+  return text.empty() ? 0.0 : parseMemory(text, "--max-memory");
+}
+
+}  // namespace
+
 ReaderOptions readerOptions(const OptionValues& values, const std::string& program) {
   auto text = [&](const char* name) { return optionText(values, name); };
   ReaderOptions ro;
@@ -525,6 +536,16 @@ ReaderOptions readerOptions(const OptionValues& values, const std::string& progr
   const int maxMoves = wholeNumber(text("max-moves"), "--max-moves");
   if (maxMoves < 1) throw ParameterError("--max-moves must be positive");
   ro.maxMoves = static_cast<std::size_t>(maxMoves);
+  // The moves the run's memory holds, each with at least one step (a loop that never ends
+  // under a cluster job's memory limit is refused here, not by the allocator); the list of
+  // moves holds up to three times its moves while it grows (the old array and the new).
+  const MemoryLimit memory = memoryLimit(maxMemoryOption(values));
+  const double byMemory = memory.bytes / static_cast<double>(3 * sizeof(Move) + sizeof(StepRecord));
+  if (byMemory < static_cast<double>(ro.maxMoves)) {
+    ro.maxMoves = static_cast<std::size_t>(std::max(1.0, byMemory));
+    ro.maxMovesWhy =
+        " (what " + memoryText(memory.bytes) + " holds with their steps: " + memory.source + ")";
+  }
   // --start: three lengths, bare numbers in the program's units (its first G20/G21).
   if (const std::string start = text("start"); !start.empty()) {
     const std::optional<bool> inch =
@@ -591,6 +612,7 @@ std::optional<CamoticsProject> readJobProgram(Job& job, const OptionValues& valu
   job.path = project ? readPrograms(project->files, ro) : readProgram(job.program, ro);
   job.reader = ro;
   job.simulation.maxSteps = static_cast<std::size_t>(maxSteps);
+  job.maxMemory = maxMemoryOption(values);
   dropWords(job);
   if (project && project->files.size() > 1 && command == JobCommand::Schedule)
     throw ParameterError(job.program + ": schedule re-feeds one program and this project runs " +

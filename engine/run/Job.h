@@ -75,6 +75,7 @@ struct Job {
   CellChoice cellChoice;
   bool voxelGiven = false;       ///< --voxel was given
   SimulationOptions simulation;  ///< step length, stepover, depth (no progress)
+  double maxMemory = 0.0;        ///< --max-memory, bytes; 0: what the process may use
   bool crossCheck = false;       ///< also run the other stock model
   double crossTolerance = 0.03;  ///< relative per-step difference it allows
   ScheduleOptions schedule;      ///< used by schedule jobs
@@ -87,7 +88,7 @@ struct Job {
   /// (summary.json, the re-fed program): a batch of ten thousand programs fits a quota.
   enum class Outputs { All, Tables, Summary } outputs = Outputs::All;
   /// stock.stl's triangle budget (VoxelStock::viewMesh); 0: the full grid.
-  std::size_t stlTriangles = 0;
+  std::size_t stlTriangles = 2'000'000;
   /// Write stock.vdb whatever the outputs (a later batch job takes it as its stock).
   bool keepStock = false;
   bool quiet = false;  ///< no progress on the terminal

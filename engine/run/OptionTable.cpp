@@ -134,6 +134,10 @@ std::vector<OptionInfo> makeTable() {
             "most moves a program may make (a loop that never ends is refused at this)"),
       plain("max-steps", K::Count, G::Simulation, "5000000",
             "most steps a run may make (about 150 bytes each)"),
+      plain("max-memory", K::Text, G::Simulation, "",
+            "memory the run may use, e.g. 8GB: a run whose estimate (stock, steps, moves, "
+            "outputs) is larger is refused before it starts (default: what this process may "
+            "use: the available memory, the cgroup's limit, ulimit -v)"),
       plain("material", K::Text, G::Simulation, "",
             "workpiece material, for the chip thickness, forces, torque and power of every "
             "step: a bundled name (aluminium-7075-t6, steel-c45, stainless-304, ti-6al-4v) or "
@@ -151,10 +155,10 @@ std::vector<OptionInfo> makeTable() {
       choice("outputs", G::Output, {"all", "tables", "summary"}, "all",
              "files to write: all; tables (steps.csv, summary.json, report.html without its 3D "
              "view); summary (summary.json); schedule writes the re-fed program with each"),
-      plain("stl-triangles", K::Count, G::Output, "0",
-            "stock.stl with at most about this many triangles (voxels averaged in blocks of "
-            "2, 4 or 8, nearly flat cells merged), for batches that must fit a quota; 0: the "
-            "full grid"),
+      plain("stl-triangles", K::Count, G::Output, "2000000",
+            "stock.stl with at most about this many triangles (nearly flat cells merged, and "
+            "where that is not enough the voxels averaged in blocks of 2, 4 or 8); 0: every "
+            "cell of the grid"),
       plain("no-report", K::Flag, G::Output, "",
             "do not write report.html (the run's summary, plots and 3D view in one page)"),
       commandLineOnly(plain("quiet", K::Flag, G::Output, "", "no progress on the terminal")),

@@ -49,6 +49,12 @@ OutputDirectory::OutputDirectory(const std::filesystem::path& dir) {
     if (!(f << 'x') || !f.flush()) fail("a file cannot be written there");
   }
   fs::remove(probe, ec);
+  if (!created_.empty()) unfinished_ = std::make_unique<Unfinished>(created_);
+}
+
+void OutputDirectory::keep() {
+  keep_ = true;
+  unfinished_.reset();
 }
 
 OutputDirectory::~OutputDirectory() {
@@ -117,6 +123,7 @@ StagedOutputs::StagedOutputs(const fs::path& out) : out_(out) {
   staging_ = out / (stagingPrefix() + std::to_string(::getpid()));
   std::error_code ec;
   fs::remove_all(staging_, ec);
+  unfinished_ = std::make_unique<Unfinished>(staging_);
   fs::create_directories(staging_, ec);
   if (ec) throw Error("cannot write to the output folder '" + out.string() + "': " + ec.message());
 }
@@ -163,6 +170,7 @@ void StagedOutputs::publish() {
   }
   fs::remove_all(staging_, ec);
   published_ = true;
+  unfinished_.reset();
 }
 
 std::string readFile(const std::filesystem::path& path) {

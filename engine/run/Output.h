@@ -3,7 +3,10 @@
 /// Writing output files so that nothing is ever half-written: the text goes to a temporary
 /// name beside the target and is renamed when complete; a CSV field quoted.
 
+#include "stock/AtomicFile.h"
+
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -28,10 +31,11 @@ class OutputDirectory {
   OutputDirectory(const OutputDirectory&) = delete;
   OutputDirectory& operator=(const OutputDirectory&) = delete;
   /// The run succeeded: keep the folder.
-  void keep() { keep_ = true; }
+  void keep();
 
  private:
-  std::filesystem::path created_;  ///< the topmost folder this made; empty if none
+  std::filesystem::path created_;           ///< the topmost folder this made; empty if none
+  std::unique_ptr<Unfinished> unfinished_;  ///< created_, while the run has not succeeded
   bool keep_ = false;
 };
 
@@ -56,6 +60,7 @@ class StagedOutputs {
 
  private:
   std::filesystem::path out_, staging_;
+  std::unique_ptr<Unfinished> unfinished_;  ///< staging_, until it is published
   bool published_ = false;
 };
 

@@ -6,6 +6,7 @@
 #include "cutters/Error.h"
 #include "cutters/Numbers.h"
 #include "engine/gcode/GcodeWriter.h"
+#include "engine/run/Memory.h"
 #include "engine/run/Output.h"
 #include "engine/run/Resolution.h"
 #include "stock/DexelStock.h"
@@ -198,11 +199,58 @@ Verification verifySchedule(const RunResult& r) {
   return v;
 }
 
+MemoryEstimate memoryEstimate(const Job& job, double stopAbove) {
+  MemoryEstimate e;
+  e.moves = static_cast<double>(job.path.moves.size()) * sizeof(Move);
+  const double perStep = static_cast<double>(sizeof(StepRecord)) +
+                         (job.simulation.physics ? static_cast<double>(sizeof(StepLoad)) : 0.0);
+  e.steps = stepCount(job.path, job.stepLength()) * perStep * (job.scheduling() ? 2.0 : 1.0);
+  if (job.stock.box) {
+    const bool voxel = job.stockModel == StockModel::Voxel || job.crossCheck;
+    const std::vector<Box3> reach = voxel ? jobReach(job) : std::vector<Box3>{};
+    const double rays = DexelStock::memoryBound(*job.stock.box, job.voxel) /
+                        static_cast<double>(DexelStock::kBytesPerRay);
+    auto one = [&](StockModel m) {
+      return m == StockModel::Voxel
+                 ? VoxelStock::memoryBound(*job.stock.box, job.voxel, &reach, stopAbove)
+                 : 100.0 * rays;
+    };
+    e.stocks = one(job.stockModel);
+    if (job.crossCheck) e.stocks += one(job.otherModel());
+    if (job.scheduling()) e.stocks += one(job.stockModel);  // the re-fed program's re-simulation
+    if (job.outputs == Job::Outputs::All)
+      e.outputs = job.stockModel == StockModel::Voxel ? one(StockModel::Voxel) : 350.0 * rays;
+  }
+  return e;
+}
+
 namespace {
+
+/// Refuses a run whose estimate exceeds what it may use, with the estimate, by part, and
+/// what to change.
+void checkMemory(const Job& job) {
+  const MemoryLimit may = memoryLimit(job.maxMemory);
+  const MemoryEstimate need = memoryEstimate(job, may.bytes);
+  if (!(need.total() > may.bytes)) return;
+  // What to change: what alone does not fit, else the stock files that make it not fit.
+  std::string advice;
+  if (need.total() - need.outputs <= may.bytes)
+    advice = "--outputs tables or summary (no stock files), a larger --voxel";
+  else if (need.stocks >= need.steps)
+    advice = "a larger --voxel";
+  else
+    advice = "fewer steps (a longer --step)";
+  throw ParameterError("this run needs about " + memoryText(need.total()) + " of memory (stock " +
+                       memoryText(need.stocks) + ", stock files " + memoryText(need.outputs) +
+                       ", steps " + memoryText(need.steps) + ", moves " + memoryText(need.moves) +
+                       ") and may use " + memoryText(may.bytes) + " (" + may.source + "): use " +
+                       advice + ", or give it more (--max-memory)");
+}
 
 PreparedRun prepareStocks(Job job) {
   // Bounded work: a move of 1e9 mm or a helix of 100000 turns is refused before anything.
   checkStepCount(job.path, job.stepLength(), job.simulation.maxSteps);
+  checkMemory(job);
   PreparedRun run;
   if (!job.stock.none()) {
     run.stock = makeStock(job, job.stockModel, job.voxel);
@@ -228,23 +276,6 @@ PreparedRun prepareStocks(Job job) {
 }
 
 }  // namespace
-
-double memoryEstimate(const Job& job) {
-  double bytes = 64e6;
-  if (job.stock.box) {
-    const bool voxel = job.stockModel == StockModel::Voxel || job.crossCheck;
-    const std::vector<Box3> reach = voxel ? jobReach(job) : std::vector<Box3>{};
-    auto one = [&](StockModel m) {
-      return m == StockModel::Voxel ? VoxelStock::memoryBound(*job.stock.box, job.voxel, &reach)
-                                    : DexelStock::memoryBound(*job.stock.box, job.voxel) /
-                                          DexelStock::kBytesPerRay * 1000.0;
-    };
-    bytes += one(job.stockModel);
-    if (job.crossCheck) bytes += one(job.otherModel());
-    if (job.scheduling()) bytes += one(job.stockModel);  // the re-fed program's re-simulation
-  }
-  return bytes;
-}
 
 PreparedRun prepareRun(Job job) {
   // The stocks' checks speak mm; an inch run's errors speak inches.

@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -88,18 +89,33 @@ struct RunResult {
 /// executeRun calls it for every schedule with a stock.
 Verification verifySchedule(const RunResult& r);
 
-/// The memory a run of `job` may come to hold, bytes, for a batch to decide how many jobs run
-/// side by side: 64 MB for the program, steps and outputs, plus per stock (the run's, the
-/// cross-check's, a schedule's re-simulation's) of a box: the voxel model's bound where the
-/// program cuts (VoxelStock::memoryBound over programReach: 1.84 GB for the finishing
-/// benchmark at 0.05 mm, whose run peaks at 1.43 GB; 4.20 GB for tiger at 0.125 mm, peak 3.78
-/// GB) or 1 kB per dexel ray (the finishing benchmark with dexels at 0.1 mm: 350 MB for 422,500
-/// rays). A mesh
-/// stock counts its bounds unknown: the 64 MB.
-double memoryEstimate(const Job& job);
+/// The memory a run of `job` may come to hold, bytes, by what holds it; checked against the
+/// memory the run may use before it starts (prepareRun), and a batch reserves it for each job
+/// it runs side by side.
+struct MemoryEstimate {
+  double fixed = 64e6;   ///< the process's libraries and small structures
+  double moves = 0.0;    ///< the program's moves (already read)
+  double steps = 0.0;    ///< a record per step (and its loads with --material; twice to schedule)
+  double stocks = 0.0;   ///< the run's stock, the cross-check's, a schedule's re-simulation's
+  double outputs = 0.0;  ///< the stock files and the report's 3D view (--outputs all)
+  double total() const { return fixed + moves + steps + stocks + outputs; }
+};
 
-/// Build the job's stock (and the cross-check's), check that the tool path reaches it, read
-/// the part and check that it lies in the stock. Throws Error; writes nothing.
+/// Per stock of a box: the voxel model's bound where the program cuts (VoxelStock::memoryBound
+/// over programReach: 1.84 GB for the finishing benchmark at 0.05 mm, whose run peaks at 1.43
+/// GB; 4.20 GB for tiger at 0.125 mm, peak 3.78 GB), or 100 bytes per dexel ray (the rays and
+/// their record of the removal: a 0.2 mm tool's PCB isolation over 12 million rays peaks at
+/// 1.3 GB with --outputs summary); the stock files and the report's view as much again for
+/// voxels and 350 bytes a ray for dexels (converted to voxels for them; that PCB run peaks at
+/// 4.9 GB with all outputs). A mesh or stock.vdb stock counts the 64 MB only. A voxel
+/// stock's bound stops counting above `stopAbove` bytes (a cell far too fine is known to be
+/// too large before its leaves are all counted).
+MemoryEstimate memoryEstimate(const Job& job,
+                              double stopAbove = std::numeric_limits<double>::infinity());
+
+/// Check the run's memory estimate against what it may use (--max-memory, else the process's
+/// limit: Memory.h), build the job's stock (and the cross-check's), check that the tool path
+/// reaches it, read the part and check that it lies in the stock. Throws Error; writes nothing.
 PreparedRun prepareRun(Job job);
 
 /// Simulate, cross-check and schedule, and compare the final stock with the part. Throws Error

@@ -180,6 +180,62 @@ for t in 0.5 1.5 2.5 3.5; do
   done
 done
 
+# SIGINT while the stock files of a fine grid are made (OpenVDB's meshing cannot be asked to
+# stop): the run ends within a second, exit 130, its new folder removed.
+python3 "$data/../tests/bench/pcb_isolation.py" --width 20 --height 15 >"$work/pcb.ngc"
+for wait_after in 0.5 2; do
+  out=$work/fine/run
+  rm -rf "$work/fine"
+  "$engage" simulate "$work/pcb.ngc" --tool flat --diameter 0.2mm --stock box:0,0,-1.6,20,15,0 \
+    --out "$out" >/dev/null 2>"$work/err.txt" &
+  pid=$!
+  for _ in $(seq 6000); do  # the outputs begin: steps.csv staged (at most 60 s)
+    kill -0 "$pid" 2>/dev/null || break
+    staged steps.csv && break
+    sleep 0.01
+  done
+  sleep "$wait_after"
+  start=$(date +%s.%N)
+  kill -INT "$pid" 2>/dev/null
+  wait "$pid"
+  rc=$?
+  took=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.2f", b - a }')
+  echo "faults: SIGINT $wait_after s into the fine grid's outputs: exit $rc after $took s"
+  [ "$rc" -eq 130 ] || sed 's/^/faults: its stderr: /' "$work/err.txt"
+  check "SIGINT in the stock files: exit 130 (got $rc)" test "$rc" -eq 130
+  check "SIGINT in the stock files: ended within a second (took $took s)" \
+    awk -v t="$took" 'BEGIN { exit !(t < 1.0) }'
+  check "SIGINT in the stock files: nothing left of the new folder" absent "$work/fine"
+done
+
+# Out of memory: under an address-space limit (a cluster job's) a run too large for it is
+# refused before it starts with its estimate, a program that never ends is refused at the
+# moves the memory holds, and an allocation that fails anyway ends as "out of memory", exit 8:
+# never an abort. Each leaves no folder.
+rm -rf "$work/oom"
+(ulimit -v 2500000; "$engage" simulate "$work/pcb.ngc" --tool flat --diameter 0.1mm \
+  --stock box:0,0,-1.6,20,15,0 --out "$work/oom/run" >/dev/null 2>"$work/err.txt")
+rc=$?
+check "too large for ulimit -v: refused up front (exit 1; got $rc)" test "$rc" -eq 1
+check "too large for ulimit -v: says its estimate" says "this run needs about .* may use"
+check "too large for ulimit -v: no folder" absent "$work/oom"
+printf 'G21 G90 F600\nG0 X0 Y0 Z1\nG1 Z-1\no100 while [1]\nG1 X10\nG1 X0\no100 endwhile\nM2\n' \
+  >"$work/endless.ngc"
+(ulimit -v 2500000; "$engage" simulate "$work/endless.ngc" --tool flat --diameter 6mm \
+  --stock box:-5,-5,-5,15,5,0 --out "$work/oom/run" >/dev/null 2>"$work/err.txt")
+rc=$?
+check "a loop that never ends under ulimit -v: refused (exit 1; got $rc)" test "$rc" -eq 1
+check "a loop that never ends under ulimit -v: at the moves the memory holds" \
+  says "moves in a program (what .* holds with their steps: the address-space limit"
+check "a loop that never ends under ulimit -v: no folder" absent "$work/oom"
+(ulimit -v 2500000; "$engage" simulate "$work/pcb.ngc" --tool flat --diameter 0.1mm \
+  --stock box:0,0,-1.6,20,15,0 --max-memory 100GB --out "$work/oom/run" >/dev/null \
+  2>"$work/err.txt")
+rc=$?
+check "past ulimit -v with --max-memory: out of memory, exit 8 (got $rc)" test "$rc" -eq 8
+check "past ulimit -v with --max-memory: says out of memory" says "engage: out of memory"
+check "past ulimit -v with --max-memory: no folder" absent "$work/oom"
+
 # A batch interrupted: no record for the job it was running, and the next run completes it.
 out=$work/batch_int
 rm -rf "$out"

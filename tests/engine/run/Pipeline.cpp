@@ -408,13 +408,36 @@ TEST_CASE("a job's memory estimate follows its stock's closed-form bounds", "[ru
   // within the box) reaches leaves 0 .. 1 along X, 0 along Y, -1 .. 0 along Z: 4 leaves of 512
   // voxels of 40 bytes.
   const double voxels = 32 * 2.5e3 + 4 * 512 * 40.0;
-  CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) == Approx(64e6 + voxels));
-  // Dexels: 10 x 10 rays of 1 kB each.
+  MemoryEstimate e = memoryEstimate(makeJob(JobCommand::Simulate, v));
+  CHECK(e.fixed == 64e6);
+  CHECK(e.stocks == Approx(voxels));
+  CHECK(e.outputs == Approx(voxels));  // the stock files: as much again (--outputs all)
+  // The slot's 10 mm at steps of at most 2.5 voxels (2.5 mm), plus its plunge and rapids: at
+  // least 4 steps of a record each.
+  CHECK(e.steps >= 4 * sizeof(StepRecord));
+  v["outputs"] = "summary";
+  CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)).outputs == 0.0);
+  // Dexels: 10 x 10 rays of 100 bytes each, the stock files 350 bytes a ray.
   v["stock-model"] = "dexel";
-  CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) == Approx(64e6 + 100 * 1000.0));
+  v["outputs"] = "all";
+  e = memoryEstimate(makeJob(JobCommand::Simulate, v));
+  CHECK(e.stocks == Approx(100 * 100.0));
+  CHECK(e.outputs == Approx(100 * 350.0));
   // A cross-check holds both stocks.
   v["cross-check"] = "true";
-  CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)) == Approx(64e6 + 100 * 1000.0 + voxels));
+  CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)).stocks == Approx(100 * 100.0 + voxels));
+  // A run that needs more than --max-memory is refused before it starts, with its estimate.
+  v["max-memory"] = "10MB";
+  try {
+    prepareRun(makeJob(JobCommand::Simulate, v));
+    FAIL("a run of about 64 MB under --max-memory 10MB was not refused");
+  } catch (const ParameterError& err) {
+    const std::string m = err.what();
+    CHECK(m.find("this run needs about 64 MB of memory") != std::string::npos);
+    CHECK(m.find("may use 10 MB (--max-memory)") != std::string::npos);
+  }
+  v["max-memory"] = "1GB";
+  CHECK_NOTHROW(prepareRun(makeJob(JobCommand::Simulate, v)));
 }
 
 TEST_CASE("without a machine the tool starts above a stock that reaches above Z0", "[run]") {
