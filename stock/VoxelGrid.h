@@ -62,6 +62,19 @@ void writeVdb(const std::string& path, const openvdb::GridPtrVec& grids);
 FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
                                const std::vector<std::array<float, 3>>& points);
 
+/// Most voxels stock.vdb's level set may have (about 10 bytes each while it is made, 4 in the
+/// file): about 3 layers on each side of a surface of 330 mm^2 at 0.01 mm.
+constexpr double kFileBandVoxels = 2e7;
+
+/// The factor (1, 2, 4 or 8) by which stock.vdb's level set is coarser than the grid: the
+/// least that keeps its band, about 7 layers over the surface's area (the grid's bounds' faces
+/// and a voxel's face for each partial voxel), within kFileBandVoxels.
+int fileSurfaceFactor(const FloatGrid& grid);
+
+/// The fractions averaged over blocks of factor^3 voxels (factor 2, 4 or 8) on a grid that
+/// many times coarser (VoxelSurface.cpp); the volume is kept.
+FloatGrid::Ptr boxFiltered(const FloatGrid& grid, double h, int factor);
+
 }  // namespace engage::voxel
 
 namespace engage {

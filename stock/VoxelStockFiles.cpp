@@ -451,7 +451,7 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
   impl->grid->setGridClass(openvdb::GRID_FOG_VOLUME);
   // Each voxel gets the material of the columns it overlaps: volume share x the interval's
   // share x the column's weight. Voxel column by voxel column, its four dexel columns' material
-  // per height summed in an array (as writeRemovedVdb merges their losses); the voxels below 1
+  // merged (as writeRemovedVdb merges their losses); the voxels below 1
   // written one by one, and the run of full ones each 8 x 8 block of voxel columns shares as
   // one box (tiles where it covers whole leaves), the rest of each run one by one: each
   // voxel is written once, not added into from each of its columns.
@@ -463,7 +463,7 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
   };
   std::vector<FullRun> full(static_cast<std::size_t>(ax) * static_cast<std::size_t>(by));
   auto acc = impl->grid->getAccessor();
-  std::vector<double> merged;
+  std::vector<std::pair<int, double>> levels, pieces;  // (voxel height, material)
   for (int b = 0; b < by; ++b)
     for (int a = 0; a < ax; ++a) {
       struct Part {
@@ -481,23 +481,67 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
         kHigh = std::max(kHigh, static_cast<int>(std::floor(ray.back().z1 / h + 0.5)));
       });
       if (count == 0) continue;
-      merged.assign(static_cast<std::size_t>(kHigh - kLow + 1), 0.0);
+      // Each interval adds its material w to the voxels it covers whole (a change of the
+      // column's level from its first whole voxel on, and back after its last) and its share
+      // of each end voxel (a piece): the column is then walked from change to change, not
+      // voxel by voxel (a column is tens to thousands of voxels high and mostly whole).
+      levels.clear();
+      pieces.clear();
       for (int p = 0; p < count; ++p)
-        for (const DexelStock::Interval& iv : d.ray(parts[p].i, parts[p].j))
-          DexelStock::voxelHeights(h, iv.z0, iv.z1, [&](int k, double z) {
-            merged[static_cast<std::size_t>(k - kLow)] += z * iv.f * parts[p].share;
-          });
+        for (const DexelStock::Interval& iv : d.ray(parts[p].i, parts[p].j)) {
+          const double w = iv.f * parts[p].share;
+          const int k0 = static_cast<int>(std::floor(iv.z0 / h + 0.5));
+          const int k1 = static_cast<int>(std::floor(iv.z1 / h + 0.5));
+          if (k0 == k1) {
+            pieces.emplace_back(k0, (iv.z1 - iv.z0) / h * w);
+            continue;
+          }
+          pieces.emplace_back(k0, ((k0 + 0.5) * h - iv.z0) / h * w);
+          pieces.emplace_back(k1, (iv.z1 - (k1 - 0.5) * h) / h * w);
+          if (k0 + 1 < k1) {
+            levels.emplace_back(k0 + 1, w);
+            levels.emplace_back(k1, -w);
+          }
+        }
+      std::sort(levels.begin(), levels.end());
+      std::sort(pieces.begin(), pieces.end());
       FullRun& run = full[static_cast<std::size_t>(b) * static_cast<std::size_t>(ax) +
                           static_cast<std::size_t>(a)];
-      for (int k = kLow; k <= kHigh; ++k) {
-        const auto v =
-            static_cast<float>(std::min(1.0, merged[static_cast<std::size_t>(k - kLow)]));
+      // Voxels [k, end) of material v: the column's first run of whole voxels kept as a run
+      // (boxes of 8 x 8 columns below), everything else written one by one.
+      auto emit = [&](int k, int end, double m) {
+        const auto v = static_cast<float>(std::min(1.0, m));
+        if (!(v > 0.0f)) return;
         if (v == 1.0f && (run.k0 > run.k1 || run.k1 == k - 1)) {
           if (run.k0 > run.k1) run.k0 = k;
-          run.k1 = k;  // (a column's first run of full voxels; later ones go one by one)
-        } else if (v > 0.0f) {
-          acc.setValue(Coord(corner.cx + a, corner.cy + b, k), v);
+          run.k1 = end - 1;
+          return;
         }
+        for (int q = k; q < end; ++q)
+          acc.setValue(Coord(corner.cx + a, corner.cy + b, q), v);
+      };
+      double level = 0.0;
+      std::size_t li = 0, pi = 0;
+      int k = std::min(levels.empty() ? kHigh + 1 : levels.front().first,
+                       pieces.empty() ? kHigh + 1 : pieces.front().first);
+      while (k <= kHigh) {
+        while (li < levels.size() && levels[li].first == k)
+          level += levels[li++].second;
+        double m = level;
+        bool piece = false;
+        while (pi < pieces.size() && pieces[pi].first == k) {
+          m += pieces[pi++].second;
+          piece = true;
+        }
+        const int next = std::min(li < levels.size() ? levels[li].first : kHigh + 1,
+                                  pi < pieces.size() ? pieces[pi].first : kHigh + 1);
+        if (piece) {
+          emit(k, k + 1, m);
+          if (next > k + 1) emit(k + 1, next, level);
+        } else {
+          emit(k, next, level);
+        }
+        k = next;
       }
     }
   for (int b0 = 0; b0 < by; b0 += 8)
@@ -867,7 +911,16 @@ DexelStock VoxelStock::dexelsFromVdb(const std::string& path, double h) {
 void VoxelStock::writeStockVdb(const std::string& path, const DexelStock* rays) const {
   const FloatGrid& grid = *impl_->grid;
   const double h = impl_->h;
-  const FloatGrid::Ptr surface = surfaceLevelSet(grid, h, 3, impl_->surfaceMesh()->points);
+  // The level set at the grid's cell, or coarser where that would be large (a fine tool's
+  // grid over a whole board): it is for viewing; a run goes on from the fractions and planes.
+  const int coarser = fileSurfaceFactor(grid);
+  FloatGrid::Ptr surface;
+  if (coarser == 1) {
+    surface = surfaceLevelSet(grid, h, 3, impl_->surfaceMesh()->points);
+  } else {
+    const FloatGrid::Ptr averaged = boxFiltered(grid, h, coarser);
+    surface = surfaceLevelSet(*averaged, coarser * h, 3, isoSurface(*averaged, 0.0).points);
+  }
   // The partial voxels' planes (or the stock box's faces), for a run that goes on from here.
   openvdb::Vec3SGrid::Ptr planes[3];
   for (int i = 0; i < 3; ++i) {

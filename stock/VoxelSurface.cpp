@@ -131,6 +131,10 @@ class BandBlocks {
   std::unordered_map<std::uint64_t, std::int32_t> index_;
 };
 
+}  // namespace
+
+namespace voxel {
+
 /// The fractions averaged over blocks of factor^3 voxels (factor 2, 4 or 8: a divisor of a
 /// leaf's 8), on a grid `factor` times coarser whose voxel I covers voxels factor I ..
 /// factor I + factor - 1 (its centre (factor I + (factor - 1) / 2) h). Only the leaves are
@@ -143,7 +147,9 @@ FloatGrid::Ptr boxFiltered(const FloatGrid& grid, double h, int factor) {
   openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(factor * h);
   xf->postTranslate(openvdb::Vec3d(0.5 * (factor - 1) * h));
   coarse->setTransform(xf);
-  for (auto it = grid.cbeginValueAll(); it; ++it) {
+  auto it = grid.cbeginValueAll();
+  it.setMaxDepth(FloatGrid::TreeType::ValueAllCIter::LEAF_DEPTH - 1);  // the tiles, not the voxels
+  for (; it; ++it) {
     if (it.isVoxelValue() || *it <= 0.0f) continue;
     CoordBBox b = it.getBoundingBox();
     b = CoordBBox(Coord(b.min().x() >> shift, b.min().y() >> shift, b.min().z() >> shift),
@@ -176,9 +182,22 @@ FloatGrid::Ptr boxFiltered(const FloatGrid& grid, double h, int factor) {
   return coarse;
 }
 
-}  // namespace
-
-namespace voxel {
+int fileSurfaceFactor(const FloatGrid& grid) {
+  std::size_t partial = 0;
+  for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf)
+    for (auto v = leaf->cbeginValueOn(); v; ++v)
+      if (*v > 0.0f && *v < 1.0f) ++partial;
+  const openvdb::CoordBBox b = grid.evalActiveVoxelBoundingBox();
+  const openvdb::Coord d = b.dim();
+  const double faces =
+      2.0 * (static_cast<double>(d.x()) * d.y() + static_cast<double>(d.y()) * d.z() +
+             static_cast<double>(d.z()) * d.x());
+  const double band = 7.0 * (faces + static_cast<double>(partial));  // voxels at h
+  int c = 1;
+  while (c < 8 && band / (c * c) > kFileBandVoxels)
+    c *= 2;
+  return c;
+}
 
 /// The stock's surface as a narrow-band level set (negative inside, within `halfWidth` voxels
 /// of it) of the fractions' 0.5 iso-surface, by patches of surface carried out from it.
