@@ -8,7 +8,7 @@
 /// its --part deeper than --tolerance (5 where both),
 /// 8 out of memory (what was being written is removed; earlier outputs stay),
 /// 130 interrupted (SIGINT or SIGTERM: the run stops at its next step and removes what it made,
-/// as a failed run does; a stage that does not stop by itself within half a second, such as
+/// as a failed run does; a stage that does not stop by itself within 0.3 s, such as
 /// OpenVDB's meshing, is ended there with what it was writing removed; a second signal ends
 /// the process at once).
 
@@ -78,7 +78,7 @@ constexpr const char* kOutOfMemory =
 /// checks for it, but a stage inside a library that cannot be asked to stop (OpenVDB's
 /// meshing of a large stock takes tens of seconds) is ended then, by this thread: what is
 /// being written is removed (removeUnfinished) and the process exits 130 at once.
-constexpr auto kStopGrace = std::chrono::milliseconds(500);
+constexpr auto kStopGrace = std::chrono::milliseconds(300);
 
 void endUnstoppedRun() {
   while (sem_wait(&stopPosted) != 0) {
