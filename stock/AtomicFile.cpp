@@ -13,14 +13,16 @@
 namespace engage {
 namespace {
 
+// Never destroyed: a thread that ends the process (removeUnfinished, then std::_Exit) may
+// run while the main thread's exit destroys static objects.
 std::mutex& registryMutex() {
-  static std::mutex m;
-  return m;
+  static auto* m = new std::mutex;
+  return *m;
 }
 
 std::vector<std::filesystem::path>& registry() {
-  static std::vector<std::filesystem::path> paths;
-  return paths;
+  static auto* paths = new std::vector<std::filesystem::path>;
+  return *paths;
 }
 
 }  // namespace
