@@ -633,7 +633,7 @@ BatchReport runBatch(const BatchOptions& o) {
   auto logJob = [&](const ManifestJob& job, const ordered_json& r) { progress.jobEnded(job, r); };
   auto report = [&]() { progress.line(); };
   report();
-  // Jobs side by side hold at most --memory, else 80 % of the memory available now.
+  // Jobs side by side hold at most --max-memory, else 80 % of what the process may use now.
   MemoryBudget memory(memoryLimit > 0.0 ? memoryLimit : 0.8 * processMemoryLimit().bytes);
   std::vector<std::thread> pool;
   for (int w = 0; w < workers; ++w)

@@ -29,9 +29,9 @@ struct BatchOptions {
   std::string shard;  ///< "i/N" or empty (all)
   int workers = 0;    ///< 0: one per usable CPU (at most the jobs)
   int threads = 0;    ///< CPUs to use in all; 0: usableCpus()
-  /// Memory the jobs side by side may hold ("8GB", "512MB", "2GiB"); empty: 80 % of the
-  /// available memory. Each job reserves its estimate (memoryEstimate, Pipeline.h) and waits
-  /// while the running jobs' reservations would not leave room for it.
+  /// Memory the jobs side by side may hold (--max-memory: "8GB", "512MB", "2GiB"); empty: 80 %
+  /// of what the process may use (Memory.h). Each job reserves its estimate (memoryEstimate,
+  /// Pipeline.h) and waits while the running jobs' reservations would not leave room for it.
   std::string memory;
   bool retryFailed = false;
   bool quiet = false;

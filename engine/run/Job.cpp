@@ -500,10 +500,6 @@ std::optional<bool> firstUnitsWord(const std::string& path) {
   return std::nullopt;
 }
 
-}  // namespace
-
-namespace {
-
 /// --max-memory, bytes; 0 when not given.
 double maxMemoryOption(const OptionValues& values) {
   const std::string text = optionText(values, "max-memory");
