@@ -59,17 +59,19 @@ void writeFileAtomically(const std::string& path, const std::function<void(std::
   const std::string tmp = path + ".part";
   const Unfinished unfinished(tmp);
   std::ofstream os(tmp, std::ios::binary);
-  const auto fail = [&](int error) {
+  const auto discard = [&] {
     os.close();
     std::remove(tmp.c_str());
+  };
+  const auto fail = [&](int error) {
+    discard();
     throw Error("cannot write '" + path + "': " + std::strerror(error));
   };
   if (!os) fail(errno);
   try {
     write(os);
   } catch (...) {
-    os.close();
-    std::remove(tmp.c_str());
+    discard();
     throw;
   }
   os.flush();

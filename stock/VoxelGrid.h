@@ -62,6 +62,9 @@ void writeVdb(const std::string& path, const openvdb::GridPtrVec& grids);
 FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
                                const std::vector<std::array<float, 3>>& points);
 
+/// The voxels of the grid's leaves whose fraction is strictly between 0 and 1.
+std::size_t partialVoxels(const FloatGrid& grid);
+
 /// Most voxels stock.vdb's level set may have (about 10 bytes each while it is made, 4 in the
 /// file): about 3 layers on each side of a surface of 330 mm^2 at 0.01 mm.
 constexpr double kFileBandVoxels = 2e7;

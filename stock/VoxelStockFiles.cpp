@@ -471,13 +471,12 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
         double share;
       } parts[4];
       int count = 0;
-      int kLow = std::numeric_limits<int>::max(), kHigh = std::numeric_limits<int>::min();
+      int kHigh = std::numeric_limits<int>::min();
       corner.columnsOf(d, a, b, [&](int i, int j, double inVoxel) {
         const double share = inVoxel * d.weight(i, j);
         const auto& ray = d.ray(i, j);
         if (!(share > 0.0) || ray.empty()) return;
         parts[count++] = {i, j, share};
-        kLow = std::min(kLow, static_cast<int>(std::floor(ray.front().z0 / h + 0.5)));
         kHigh = std::max(kHigh, static_cast<int>(std::floor(ray.back().z1 / h + 0.5)));
       });
       if (count == 0) continue;
@@ -527,20 +526,13 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
       while (k <= kHigh) {
         while (li < levels.size() && levels[li].first == k)
           level += levels[li++].second;
-        double m = level;
-        bool piece = false;
-        while (pi < pieces.size() && pieces[pi].first == k) {
+        double m = level;  // voxel k: the level and its pieces
+        while (pi < pieces.size() && pieces[pi].first == k)
           m += pieces[pi++].second;
-          piece = true;
-        }
         const int next = std::min(li < levels.size() ? levels[li].first : kHigh + 1,
                                   pi < pieces.size() ? pieces[pi].first : kHigh + 1);
-        if (piece) {
-          emit(k, k + 1, m);
-          if (next > k + 1) emit(k + 1, next, level);
-        } else {
-          emit(k, next, level);
-        }
+        emit(k, k + 1, m);
+        if (next > k + 1) emit(k + 1, next, level);
         k = next;
       }
     }

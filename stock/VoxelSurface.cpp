@@ -182,11 +182,16 @@ FloatGrid::Ptr boxFiltered(const FloatGrid& grid, double h, int factor) {
   return coarse;
 }
 
-int fileSurfaceFactor(const FloatGrid& grid) {
+std::size_t partialVoxels(const FloatGrid& grid) {
   std::size_t partial = 0;
   for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf)
     for (auto v = leaf->cbeginValueOn(); v; ++v)
       if (*v > 0.0f && *v < 1.0f) ++partial;
+  return partial;
+}
+
+int fileSurfaceFactor(const FloatGrid& grid) {
+  const std::size_t partial = partialVoxels(grid);
   const openvdb::CoordBBox b = grid.evalActiveVoxelBoundingBox();
   const openvdb::Coord d = b.dim();
   const double faces =
@@ -425,10 +430,7 @@ std::size_t VoxelStock::writeStl(const std::string& path, std::size_t maxTriangl
 
 TriangleMesh VoxelStock::viewMesh(std::size_t maxTriangles, double* cellSize) const {
   // About two triangles per partial voxel at full resolution, a quarter of that per halving.
-  std::size_t partial = 0;
-  for (auto leaf = impl_->grid->tree().cbeginLeaf(); leaf; ++leaf)
-    for (auto v = leaf->cbeginValueOn(); v; ++v)
-      if (*v > 0.0f && *v < 1.0f) ++partial;
+  const std::size_t partial = partialVoxels(*impl_->grid);
   int c = 1;
   while (c < 8 && 2.0 * static_cast<double>(partial) / (c * c) > static_cast<double>(maxTriangles))
     c *= 2;
