@@ -129,15 +129,12 @@ class VoxelStock : public Stock {
   /// Write removed.vdb: grids "removed" (fraction removed), "step" (int32, first step) and
   /// "mrr" (mm^3/min of that step). Requires captureRemoved(true) before the removals.
   void writeRemovedVdb(const std::string& path) const;
-  /// Write the stock's surface (the 0.5 iso-surface of the fraction) as binary STL with
-  /// outward normals; returns the number of boundary (unpaired) edges, 0 for a closed mesh.
-  /// With `maxTriangles` > 0, viewMesh(maxTriangles)'s coarser surface instead.
-  std::size_t writeStl(const std::string& path, std::size_t maxTriangles = 0) const;
-  /// The stock's surface as writeStl's, for viewing, with at most about `maxTriangles`
-  /// triangles: when the stock's own grid would give more, the fractions are averaged over
-  /// blocks of 2, 4 or 8 voxels a side (at most 8: beyond that the budget is exceeded); nearly
-  /// flat cells are merged (OpenVDB's adaptive meshing). `cellSize` gets the cell of the grid
-  /// meshed, mm: the mesh lies within about one such cell of the stock's surface.
+  /// The stock's surface (the 0.5 iso-surface of the fractions, outward normals) with at most
+  /// about `maxTriangles` triangles: when the stock's own grid would give more, the fractions
+  /// are averaged over blocks of 2, 4 or 8 voxels a side (at most 8: beyond that the budget is
+  /// exceeded); nearly flat cells are merged (OpenVDB's adaptive meshing). `maxTriangles` 0:
+  /// every voxel's surface, nothing merged. `cellSize` gets the cell of the grid meshed, mm:
+  /// the mesh lies within about one such cell of the stock's surface.
   TriangleMesh viewMesh(std::size_t maxTriangles, double* cellSize = nullptr) const;
 
  private:

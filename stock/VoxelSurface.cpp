@@ -416,25 +416,17 @@ std::vector<std::pair<Eigen::Vector3d, double>> VoxelStock::surfaceBand() const 
   return out;
 }
 
-std::size_t VoxelStock::writeStl(const std::string& path, std::size_t maxTriangles) const {
-  TriangleMesh coarse;
-  std::shared_ptr<const TriangleMesh> full;
-  if (maxTriangles > 0)
-    coarse = viewMesh(maxTriangles);
-  else
-    full = impl_->surfaceMesh();
-  const TriangleMesh& mesh = maxTriangles > 0 ? coarse : *full;
-  engage::writeStl(mesh, path);
-  return boundaryEdgeCount(mesh);
-}
-
 TriangleMesh VoxelStock::viewMesh(std::size_t maxTriangles, double* cellSize) const {
+  const double h = impl_->h;
+  if (maxTriangles == 0) {
+    if (cellSize) *cellSize = h;
+    return *impl_->surfaceMesh();
+  }
   // About two triangles per partial voxel at full resolution, a quarter of that per halving.
   const std::size_t partial = partialVoxels(*impl_->grid);
   int c = 1;
   while (c < 8 && 2.0 * static_cast<double>(partial) / (c * c) > static_cast<double>(maxTriangles))
     c *= 2;
-  const double h = impl_->h;
   constexpr double kAdaptivity = 0.1;  // merges flat floors and walls, keeps edges
   auto meshAt = [&](int factor) {
     if (factor == 1) return isoSurface(*impl_->grid, kAdaptivity);

@@ -156,9 +156,9 @@ std::vector<OptionInfo> makeTable() {
              "files to write: all; tables (steps.csv, summary.json, report.html without its 3D "
              "view); summary (summary.json); schedule writes the re-fed program with each"),
       plain("stl-triangles", K::Count, G::Output, "2000000",
-            "stock.stl with at most about this many triangles (nearly flat cells merged, and "
-            "where that is not enough the voxels averaged in blocks of 2, 4 or 8); 0: every "
-            "cell of the grid"),
+            "stock.stl with at most about this many triangles (nearly flat areas merged, and "
+            "where that is not enough a coarser grid: every 2nd, 4th, ... ray of a dexel "
+            "stock, voxels averaged in blocks of 2, 4 or 8); 0: every cell of the grid"),
       plain("no-report", K::Flag, G::Output, "",
             "do not write report.html (the run's summary, plots and 3D view in one page)"),
       commandLineOnly(plain("quiet", K::Flag, G::Output, "", "no progress on the terminal")),

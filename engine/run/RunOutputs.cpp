@@ -112,9 +112,13 @@ WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::p
     }
     auto plots = std::async(std::launch::async, [&ps] { return writePlots(ps); });
     // The report's 3D view made beside the stock files.
-    std::function<void(const VoxelStock&)> view3d;
+    std::function<void()> view3d;
     if (result.job.report)
-      view3d = [&](const VoxelStock& voxels) { surface = reportSurface(result, voxels); };
+      view3d = [&] {
+        double cell = 0.0;
+        const TriangleMesh mesh = view.surface(kMaxTriangles, &cell);
+        surface = reportSurface(result, mesh, cell);
+      };
     w.openEdges = writeStockFiles(result, view, dir, view3d);
     try {
       for (const std::string& f : plots.get())

@@ -138,10 +138,8 @@ json sourceLines(const RunResult& result, const std::vector<std::size_t>& steps)
 
 /// The stock's surface for the 3D view, in display units, with per vertex the step that last
 /// cut there (an index into the returned table's steps, -1 for faces never cut).
-json surfaceJson(const RunResult& result, const VoxelStock& voxels,
+json surfaceJson(const RunResult& result, const TriangleMesh& mesh, double cell,
                  std::vector<std::size_t>& tableSteps) {
-  double cell = 0.0;
-  const TriangleMesh mesh = voxels.viewMesh(kMaxTriangles, &cell);
   const double h = result.stock->resolution();
   // Within a meshing cell and a half of the swept surface; steps below a hundredth of a
   // voxel removed nothing (air).
@@ -200,9 +198,9 @@ json surfaceJson(const RunResult& result, const VoxelStock& voxels,
 
 }  // namespace
 
-ReportSurface reportSurface(const RunResult& result, const VoxelStock& voxels) {
+ReportSurface reportSurface(const RunResult& result, const TriangleMesh& mesh, double cell) {
   ReportSurface out;
-  out.json = surfaceJson(result, voxels, out.steps).dump();
+  out.json = surfaceJson(result, mesh, cell, out.steps).dump();
   return out;
 }
 
@@ -408,7 +406,12 @@ std::string runReportHtml(const RunResult& result, const std::string& summaryJso
                           const std::vector<std::size_t>& kept, const WrittenOutputs& written,
                           const VoxelStock* surface) {
   std::ostringstream os;
-  const ReportSurface shown = surface ? reportSurface(result, *surface) : ReportSurface{};
+  ReportSurface shown;
+  if (surface) {
+    double cell = 0.0;
+    const TriangleMesh mesh = surface->viewMesh(kMaxTriangles, &cell);
+    shown = reportSurface(result, mesh, cell);
+  }
   writeRunReportHtml(os, result, summaryJsonText, kept, written, surface ? &shown : nullptr);
   return os.str();
 }

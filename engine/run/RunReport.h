@@ -13,10 +13,11 @@
 /// measured and analytic MRR,
 /// highest scheduled MRR, force and acceleration, lowest scheduled feed) besides every peak
 /// summary.json names, so no peak is lost. The 3D view is the stock's surface from at most
-/// kMaxTriangles triangles (VoxelStock::viewMesh).
+/// kMaxTriangles triangles (StockView::surface).
 
 #include "engine/run/Pipeline.h"
 #include "engine/run/Summary.h"
+#include "stock/TriangleMesh.h"
 
 #include <cstddef>
 #include <iosfwd>
@@ -39,8 +40,9 @@ struct ReportSurface {
   std::string json;                ///< the page's "surface" object, JSON text
   std::vector<std::size_t> steps;  ///< the steps its vertices name (their table), in order
 };
-/// `voxels`: the final stock as voxels (StockView).
-ReportSurface reportSurface(const RunResult& result, const VoxelStock& voxels);
+/// `mesh`: the final stock's surface (StockView::surface, kMaxTriangles), `cell` its
+/// vertices' spacing (mm).
+ReportSurface reportSurface(const RunResult& result, const TriangleMesh& mesh, double cell);
 
 /// Write the page to `os`. `summaryJson` is summary.json's text; `steps` the steps its plots
 /// show (reportSteps); `written` the files written (named on the page); `surface`, when given,

@@ -1,5 +1,6 @@
 #include "engine/run/StockFiles.h"
 
+#include "stock/DexelMesh.h"
 #include "stock/DexelStock.h"
 #include "stock/VoxelStock.h"
 
@@ -26,9 +27,18 @@ const VoxelStock* StockView::voxels() const {
   return converted_.get();
 }
 
+TriangleMesh StockView::surface(std::size_t maxTriangles, double* cell) const {
+  if (const DexelStock* d = dexels())
+    if (std::optional<TriangleMesh> mesh = heightfieldMesh(*d, maxTriangles, cell))
+      return std::move(*mesh);
+  const VoxelStock* v = voxels();
+  if (!v) return {};
+  return v->viewMesh(maxTriangles, cell);
+}
+
 std::size_t writeStockFiles(const RunResult& result, const StockView& view,
                             const std::filesystem::path& dir,
-                            const std::function<void(const VoxelStock&)>& alongside) {
+                            const std::function<void()>& alongside) {
   // The files, and `alongside`, are independent of one another: each a task, run side by side
   // where there are cores for it (one core runs them one after another, as before). A task
   // keeps its own failure: one thrown into the group would cancel the group, and with it the
@@ -70,9 +80,12 @@ std::size_t writeStockFiles(const RunResult& result, const StockView& view,
   if (!dexels) run(0, [&] { shown->writeRemovedVdb((dir / "removed.vdb").string()); });
   run(1, [&] { shown->writeStockVdb((dir / "stock.vdb").string(), dexels); });
   std::size_t openEdges = 0;
-  run(2,
-      [&] { openEdges = shown->writeStl((dir / "stock.stl").string(), result.job.stlTriangles); });
-  if (alongside) run(3, [&] { alongside(*shown); });
+  run(2, [&] {
+    const TriangleMesh mesh = view.surface(result.job.stlTriangles);
+    writeStl(mesh, (dir / "stock.stl").string());
+    openEdges = boundaryEdgeCount(mesh);
+  });
+  if (alongside) run(3, alongside);
   finish();
   return openEdges;
 }

@@ -7,10 +7,13 @@
 
 #include "engine/run/Pipeline.h"
 
+#include "stock/TriangleMesh.h"
+
 #include <cstddef>
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 
 namespace engage {
 
@@ -30,19 +33,25 @@ class StockView {
   const VoxelStock* voxels() const;
   /// The run's dexel stock (nullptr: a voxel stock or none).
   const DexelStock* dexels() const;
+  /// The stock's surface within about `maxTriangles` triangles (0: every cell), `cell` its
+  /// vertices' spacing: a dexel stock's straight from its rays where it is a heightfield
+  /// (stock/DexelMesh.h: a tenth of a second where meshing its voxels takes seconds), else
+  /// the voxels' (VoxelStock::viewMesh; with 0 their full surface). Safe from several
+  /// threads once voxels() has been called (it converts on first use, writeStockFiles first).
+  TriangleMesh surface(std::size_t maxTriangles, double* cell = nullptr) const;
 
  private:
   const RunResult& result_;
   mutable std::unique_ptr<VoxelStock> converted_;
 };
 
-/// Write the three files into `dir`, side by side on the cores there are, with
-/// `alongside(voxels)` as one more task when given (the report's 3D view); returns the open
-/// edges of stock.stl (0: closed). Nothing is written without a stock. Throws Error naming a
+/// Write the three files into `dir`, side by side on the cores there are, with `alongside()`
+/// as one more task when given (the report's 3D view); returns the open edges of stock.stl
+/// (0: closed). Nothing is written without a stock. Throws Error naming a
 /// file that cannot be written.
 std::size_t writeStockFiles(const RunResult& result, const StockView& view,
                             const std::filesystem::path& dir,
-                            const std::function<void(const VoxelStock&)>& alongside = {});
+                            const std::function<void()>& alongside = {});
 
 /// Write stock.vdb alone into `dir` (a batch job whose stock a later job takes, with outputs
 /// other than all). Nothing is written without a stock.

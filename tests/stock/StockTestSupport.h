@@ -7,6 +7,7 @@
 #include "cutters/Sweep.h"
 #include "stock/DexelStock.h"
 #include "stock/Stock.h"
+#include "stock/TriangleMesh.h"
 #include "stock/VoxelStock.h"
 
 #include <algorithm>
@@ -25,6 +26,22 @@ inline std::unique_ptr<Stock> boxStock(const std::string& model, const Box3& box
 
 const Eigen::Vector3d kDir(std::cos(kPi / 6), std::sin(kPi / 6), 0.0);  // 30 deg to the grid
 const Eigen::Vector3d kSide(-std::sin(kPi / 6), std::cos(kPi / 6), 0.0);
+
+/// The volume a closed mesh encloses (mm^3), from its triangles' signed tetrahedra with the
+/// origin: positive where they face outwards.
+inline double meshVolume(const TriangleMesh& m) {
+  double v = 0.0;
+  for (const auto& t : m.triangles) {
+    const auto& p = m.points[t[0]];
+    const auto& q = m.points[t[1]];
+    const auto& r = m.points[t[2]];
+    v += (double{p[0]} * (double{q[1]} * r[2] - double{q[2]} * r[1]) -
+          double{p[1]} * (double{q[0]} * r[2] - double{q[2]} * r[0]) +
+          double{p[2]} * (double{q[0]} * r[1] - double{q[1]} * r[0])) /
+         6.0;
+  }
+  return v;
+}
 
 inline StepPath line(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   StepPath p;

@@ -545,6 +545,21 @@ TEST_CASE("a dexel stock written to stock.vdb comes back ray for ray", "[stock][
   std::filesystem::remove(path);
 }
 
+TEST_CASE("a dexel run's stock.vdb of the first layout is still read ray for ray", "[stock][vdb]") {
+  // Written by the build before the packed layout (5f33fb8): `engage simulate` of a 2 mm flat
+  // end mill 1 mm deep across a 6 x 5 x 3 mm box at 0.3 mm (tests/data/dexel_slot_layout1.vdb;
+  // G1 X-3 Y2.5 Z-1 to X9), rays at (i, j, n). Its summary: 78.0045 mm^3 left of 90.
+  const DexelStock d =
+      VoxelStock::dexelsFromVdb(ENGAGE_SOURCE_DIR "/tests/data/dexel_slot_layout1.vdb", 0.3);
+  CHECK(d.raysX() == 20);                                   // ceil(6 / 0.3)
+  CHECK(d.raysY() == 17);                                   // ceil(5 / 0.3)
+  CHECK(d.volume() == Approx(78.0045).epsilon(1e-6));       // (summary.json's 6 digits)
+  CHECK(d.segments() > static_cast<std::size_t>(20 * 17));  // the slot's walls split rays
+  // The slot's floor 1 mm down on the ray under its path, the box's top beside it.
+  CHECK(d.ray(10, 8).back().z1 == Approx(-1.0).margin(1e-4));
+  CHECK(d.ray(10, 1).back().z1 == Approx(0.0).margin(1e-12));
+}
+
 TEST_CASE(
     "thin cuts into a face: pecks and a wall skim against their closed forms, and pecks "
     "continued from a stock.vdb",
@@ -680,7 +695,7 @@ TEST_CASE("a stock.vdb that is not an engage stock is refused with its reason", 
   std::filesystem::remove(removed);
 }
 
-TEST_CASE("stock.stl within a triangle budget: fewer triangles, the same solid to a cell",
+TEST_CASE("voxel surface within a triangle budget: fewer triangles, the same solid to a cell",
           "[stock][vdb]") {
   // A slot across a box, 0.2 mm voxels: the full grid's surface against a budget of 2,000.
   Box3 b;
@@ -688,31 +703,16 @@ TEST_CASE("stock.stl within a triangle budget: fewer triangles, the same solid t
   b.max = {40.0, 30.0, 0.0};
   VoxelStock s = VoxelStock::box(b, 0.2);
   s.remove(Sweep(AptCutter::ball(6.0, 18.0), line({-5, 15, -2}, {45, 15, -2}), 0.2));
-  const std::string full = tempVdb("full.stl"), light = tempVdb("light.stl");
-  CHECK(s.writeStl(full) == 0);  // closed
-  CHECK(s.writeStl(light, 2000) == 0);
-  const TriangleMesh a = readMesh(full), c = readMesh(light);
+  const TriangleMesh a = s.viewMesh(0);
+  double cell = 0.0;
+  const TriangleMesh c = s.viewMesh(2000, &cell);
+  CHECK(boundaryEdgeCount(a) == 0);  // closed
+  CHECK(boundaryEdgeCount(c) == 0);
   CHECK(c.triangles.size() <= 2000);
   CHECK(c.triangles.size() * 10 < a.triangles.size());
   // The coarser surface lies within about half of one of its cells (2, 4 or 8 voxels) of the
   // stock's: its volume within the box's surface area (3,800 mm^2, the slot's less than 300
   // more) times half a cell.
-  double cell = 0.0;
-  s.viewMesh(2000, &cell);
   INFO("cell " << cell << " mm");
-  auto volume = [](const TriangleMesh& m) {
-    double v = 0.0;
-    for (const auto& t : m.triangles) {
-      const auto& p = m.points[t[0]];
-      const auto& q = m.points[t[1]];
-      const auto& r = m.points[t[2]];
-      v += (p[0] * (q[1] * r[2] - q[2] * r[1]) - p[1] * (q[0] * r[2] - q[2] * r[0]) +
-            p[2] * (q[0] * r[1] - q[1] * r[0])) /
-           6.0;
-    }
-    return v;
-  };
-  CHECK(std::abs(volume(c) - s.volume()) <= 4100.0 * cell / 2.0);
-  std::filesystem::remove(full);
-  std::filesystem::remove(light);
+  CHECK(std::abs(meshVolume(c) - s.volume()) <= 4100.0 * cell / 2.0);
 }

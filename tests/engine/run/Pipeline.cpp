@@ -417,12 +417,12 @@ TEST_CASE("a job's memory estimate follows its stock's closed-form bounds", "[ru
   CHECK(e.steps >= 4 * sizeof(StepRecord));
   v["outputs"] = "summary";
   CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)).outputs == 0.0);
-  // Dexels: 10 x 10 rays of 100 bytes each, the stock files 350 bytes a ray.
+  // Dexels: 10 x 10 rays of 100 bytes each, the stock files 160 bytes a ray.
   v["stock-model"] = "dexel";
   v["outputs"] = "all";
   e = memoryEstimate(makeJob(JobCommand::Simulate, v));
   CHECK(e.stocks == Approx(100 * 100.0));
-  CHECK(e.outputs == Approx(100 * 350.0));
+  CHECK(e.outputs == Approx(100 * 160.0));
   // A cross-check holds both stocks.
   v["cross-check"] = "true";
   CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)).stocks == Approx(100 * 100.0 + voxels));

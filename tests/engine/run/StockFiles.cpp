@@ -32,7 +32,7 @@ TEST_CASE("a stock file that cannot be written does not cut short the work besid
   // stop half-way as a cancelled loop would. Its count is exact: every index once.
   constexpr int kItems = 2000;
   std::atomic<int> visited{0};
-  auto slowLoop = [&](const VoxelStock&) {
+  auto slowLoop = [&] {
     tbb::parallel_for(0, kItems, [&](int) {
       std::this_thread::sleep_for(std::chrono::microseconds(200));
       ++visited;

@@ -1,0 +1,34 @@
+#pragma once
+/// \file DexelMesh.h
+/// A dexel stock's surface as a triangle mesh straight from its rays, where the stock is a
+/// heightfield over its box, as a 3-axis program leaves it: every column holds material from
+/// the box's floor up to one height (the top of the run of intervals from the floor that keep
+/// at least half of the floor's share of the column: the 0.5 level of the voxel fractions).
+/// The top's vertices are the rays' heights at their positions (the box's rim rays on its
+/// faces); square blocks of the ray lattice whose heights lie within a tolerance of one plane
+/// are merged bottom up (a quadtree, 2 x 2 blocks into one), each block a fan around its centre
+/// through every lattice vertex on its edges that a neighbour uses, so that the mesh is closed
+/// without T-junctions; then the box's four walls and its floor. Meshing costs about 0.1 us a
+/// ray, where meshing the stock's voxel fractions (VoxelStock::viewMesh) costs 2 us a partial
+/// voxel and several times the rays.
+
+#include "stock/TriangleMesh.h"
+
+#include <cstddef>
+#include <optional>
+
+namespace engage {
+
+class DexelStock;
+
+/// The surface of `stock` within about `maxTriangles` triangles: blocks merged within a tenth
+/// of the vertices' spacing of a plane, and where that is not enough, every second, fourth, ...
+/// ray a vertex (each the mean height of the rays around it). `maxTriangles` 0: every ray a
+/// vertex, only blocks exactly planar (to 1e-9 mm) merged. `cellSize`, when given, receives the
+/// vertices' spacing (mm). nullopt where the stock is not such a heightfield (a column empty
+/// or cut through, material above a gap, a floor that is not flat, fewer than 2 rays a side):
+/// mesh its voxels instead.
+std::optional<TriangleMesh> heightfieldMesh(const DexelStock& stock, std::size_t maxTriangles,
+                                            double* cellSize = nullptr);
+
+}  // namespace engage
