@@ -27,8 +27,9 @@ struct Heights {
 
 /// The heights of `d`, or nullopt where it is not a heightfield over a flat floor. A column's
 /// height is the floor plus the length of its material weighted by each interval's share of
-/// the column relative to the floor's interval (what the column holds, as a height: a wall
-/// crossing the column stands where the column's share puts it, between two rays).
+/// the column (what the column holds, as a height: a wall crossing the column stands where the
+/// column's share puts it, between two rays); the box's last row and column by their share of
+/// the box (the box's far faces: the most their floor's intervals hold).
 std::optional<Heights> heights(const DexelStock& d) {
   Heights f;
   f.nx = d.raysX();
@@ -38,31 +39,38 @@ std::optional<Heights> heights(const DexelStock& d) {
   f.x0 = d.originX();
   f.y0 = d.originY();
   f.floor = d.ray(0, 0).front().z0;
-  f.z.resize(static_cast<std::size_t>(f.nx) * static_cast<std::size_t>(f.ny));
   double lastX = 0.0, lastY = 0.0;  // the far faces' shares of their columns
   for (int j = 0; j < f.ny; ++j)
     for (int i = 0; i < f.nx; ++i) {
       const std::vector<DexelStock::Interval>& r = d.ray(i, j);
       if (r.empty() || std::abs(r.front().z0 - f.floor) > kSameHeight) return std::nullopt;
-      const double w = d.weight(i, j);
-      const double base = r.front().f * w;
-      if (!(base > 0.0)) return std::nullopt;
-      double height = f.floor, top = f.floor;
+      const double base = r.front().f * d.weight(i, j);
+      if (i == f.nx - 1 && j < f.ny - 1) lastX = std::max(lastX, base);
+      if (j == f.ny - 1 && i < f.nx - 1) lastY = std::max(lastY, base);
+    }
+  lastX = std::min(1.0, lastX);
+  lastY = std::min(1.0, lastY);
+  if (!(lastX > 0.0 && lastY > 0.0)) return std::nullopt;
+  f.xEnd = f.x0 + (f.nx - 1 + lastX) * f.h;
+  f.yEnd = f.y0 + (f.ny - 1 + lastY) * f.h;
+  f.z.resize(static_cast<std::size_t>(f.nx) * static_cast<std::size_t>(f.ny));
+  for (int j = 0; j < f.ny; ++j)
+    for (int i = 0; i < f.nx; ++i) {
+      const std::vector<DexelStock::Interval>& r = d.ray(i, j);
+      const double box = (i == f.nx - 1 ? lastX : 1.0) * (j == f.ny - 1 ? lastY : 1.0);
+      const double w = d.weight(i, j) / box;
+      double height = f.floor, top = f.floor, over = 0.0;
       bool gap = false;
       for (const DexelStock::Interval& piece : r) {
-        const double share = std::min(1.0, piece.f * w / base);
+        const double held = (piece.z1 - piece.z0) * std::min(1.0, piece.f * w);
         if (piece.z0 > top + kSameHeight) gap = true;
-        if (gap && share >= 0.5) return std::nullopt;  // material over air: an overhang
-        height += (piece.z1 - piece.z0) * share;
+        if (gap && (over += held) > 0.5 * f.h) return std::nullopt;  // an overhang
+        height += held;
         top = piece.z1;
       }
       f.z[static_cast<std::size_t>(j) * static_cast<std::size_t>(f.nx) +
           static_cast<std::size_t>(i)] = height;
-      if (i == f.nx - 1 && j < f.ny - 1) lastX = std::max(lastX, base);
-      if (j == f.ny - 1 && i < f.nx - 1) lastY = std::max(lastY, base);
     }
-  f.xEnd = f.x0 + (f.nx - 1 + std::min(1.0, lastX)) * f.h;
-  f.yEnd = f.y0 + (f.ny - 1 + std::min(1.0, lastY)) * f.h;
   return f;
 }
 

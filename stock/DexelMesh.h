@@ -2,15 +2,18 @@
 /// \file DexelMesh.h
 /// A dexel stock's surface as a triangle mesh straight from its rays, where the stock is a
 /// heightfield over its box, as a 3-axis program leaves it: every column holds material from
-/// the box's floor up to one height (the top of the run of intervals from the floor that keep
-/// at least half of the floor's share of the column: the 0.5 level of the voxel fractions).
-/// The top's vertices are the rays' heights at their positions (the box's rim rays on its
-/// faces); square blocks of the ray lattice whose heights lie within a tolerance of one plane
-/// are merged bottom up (a quadtree, 2 x 2 blocks into one), each block a fan around its centre
-/// through every lattice vertex on its edges that a neighbour uses, so that the mesh is closed
-/// without T-junctions; then the box's four walls and its floor. Meshing costs about 0.1 us a
-/// ray, where meshing the stock's voxel fractions (VoxelStock::viewMesh) costs 2 us a partial
-/// voxel and several times the rays.
+/// the box's floor up, none of it over air (more than half a cell's height of material above
+/// a gap is an overhang; slivers a cut left over a gap count). A column's height is its material
+/// over the floor as a mean height (each interval's length times its share of the column; the box's
+/// last row and column by their share of the box), so a wall crossing a column stands between two
+/// rays where the column's share puts it, and the mesh encloses the stock's volume. The top's
+/// vertices are the rays' heights at their positions (the box's rim rays on its faces); square
+/// blocks of the ray lattice whose heights lie within a tolerance of one plane are merged bottom up
+/// (a quadtree, 2 x 2 blocks into one), each block a fan around its centre through every lattice
+/// vertex on its edges that a neighbour uses, so that the mesh is closed without T-junctions; then
+/// the box's four walls and its floor. Meshing takes about 0.08 us a ray (0.23 s for 3 million),
+/// where meshing the stock's voxel fractions (VoxelStock::viewMesh) takes 2 us a partial voxel
+/// (14.6 s for the 7.3 million of the same stock).
 
 #include "stock/TriangleMesh.h"
 

@@ -965,7 +965,8 @@ void VoxelStock::writeStockVdb(const std::string& path, const DexelStock* rays) 
     planes[i]->setName("planes_" + std::to_string(i));
     planes[i]->setGridClass(openvdb::GRID_UNKNOWN);
   }
-  {
+  // (None without planes or a box: a dexel stock's voxels.)
+  if (!impl_->planes.empty() || impl_->box) {
     auto p0 = planes[0]->getAccessor();
     auto p1 = planes[1]->getAccessor();
     auto p2 = planes[2]->getAccessor();

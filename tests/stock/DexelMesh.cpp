@@ -8,6 +8,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -135,6 +136,21 @@ TEST_CASE("dexel mesh: not a heightfield, no mesh", "[stock]") {
     return DexelStock::fromColumns(0.0, 0.0, 1.0, 2, 2, std::move(rays));
   }();
   CHECK_FALSE(heightfieldMesh(through, 0));
+  // The box's far column holds 0.3 of its column (the face 0.3 mm into it); a cut left a
+  // sliver over a gap there: a heightfield, its far wall on the box's face.
+  const DexelStock rim = [] {
+    std::vector<std::vector<DexelStock::Interval>> rays(4, {{-3.0, 0.0, 1.0}});
+    rays[1] = {{-3.0, 0.0, 0.3}};
+    rays[3] = {{-3.0, -1.0, 0.3}, {-0.99, -0.98, 0.2}};
+    return DexelStock::fromColumns(0.0, 0.0, 1.0, 2, 2, std::move(rays));
+  }();
+  const auto m = heightfieldMesh(rim, 0);
+  REQUIRE(m);
+  CHECK(boundaryEdgeCount(*m) == 0);
+  float far = 0.0f;
+  for (const auto& p : m->points)
+    far = std::max(far, p[0]);
+  CHECK(far == Approx(1.3));
   // A thin share of material over air counts as the column's height (a crossing wall's
   // sliver): still a heightfield.
   const DexelStock sliver = [] {
