@@ -29,8 +29,8 @@ class DexelStock;
 /// ray a vertex (each the mean height of the rays around it). `maxTriangles` 0: every ray a
 /// vertex, only blocks exactly planar (to 1e-9 mm) merged. `cellSize`, when given, receives the
 /// vertices' spacing (mm). nullopt where the stock is not such a heightfield (a column empty
-/// or cut through, material above a gap, a floor that is not flat, fewer than 2 rays a side):
-/// mesh its voxels instead.
+/// or cut through, an overhang, a floor that is not flat, fewer than 2 rays a side): mesh its
+/// voxels instead.
 std::optional<TriangleMesh> heightfieldMesh(const DexelStock& stock, std::size_t maxTriangles,
                                             double* cellSize = nullptr);
 
