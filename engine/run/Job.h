@@ -87,7 +87,7 @@ struct Job {
   /// report.html without 3D view); summary
   /// (summary.json, the re-fed program): a batch of ten thousand programs fits a quota.
   enum class Outputs { All, Tables, Summary } outputs = Outputs::All;
-  /// stock.stl's triangle budget (VoxelStock::viewMesh); 0: the full grid.
+  /// stock.stl's triangle budget (StockView::surface); 0: every cell of the grid.
   std::size_t stlTriangles = 2'000'000;
   /// Write stock.vdb whatever the outputs (a later batch job takes it as its stock).
   bool keepStock = false;
