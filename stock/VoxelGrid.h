@@ -74,6 +74,15 @@ constexpr double kFileBandVoxels = 2e7;
 /// and a voxel's face for each partial voxel), within kFileBandVoxels.
 int fileSurfaceFactor(const FloatGrid& grid);
 
+/// A dexel stock's rays as grids for stock.vdb (DexelGrids.cpp): dexel_z0, dexel_z1, dexel_f,
+/// dexel_weight (double) and dexel_line (vec3s), the rays' origin, spacing, counts and layout
+/// as metadata of dexel_z0.
+openvdb::GridPtrVec dexelGrids(const DexelStock& d, const openvdb::math::Transform& xf);
+
+/// The rays a dexel run wrote into `path` (dexelGrids, either layout), when they are there at
+/// spacing h; nullopt otherwise.
+std::optional<DexelStock> exactDexels(const std::string& path, double h);
+
 /// The fractions averaged over blocks of factor^3 voxels (factor 2, 4 or 8) on a grid that
 /// many times coarser (VoxelSurface.cpp); the volume is kept.
 FloatGrid::Ptr boxFiltered(const FloatGrid& grid, double h, int factor);
