@@ -454,6 +454,14 @@ double DexelStock::materialInside(const Sweep& sweep, double top) const {
 /// kept for the heights where the nine shares stay the same: one measurement reads the same
 /// columns again and again, slice above slice.
 class DexelReader final : public MaterialReader {
+  /// The column (floor) of grid coordinate g, -1 for any left of the grid: truncation where
+  /// std::floor is a call of its own (this build targets x86-64 without SSE4.1's roundsd).
+  static int column(double g) {
+    g = std::clamp(g, -1.0, 1e9);
+    const int i = static_cast<int>(g);
+    return i - (g < static_cast<double>(i) ? 1 : 0);
+  }
+
  public:
   DexelReader(const DexelStock& stock, std::size_t afterStep) : s_(stock), after_(afterStep) {}
 
@@ -462,7 +470,7 @@ class DexelReader final : public MaterialReader {
     for (const Eigen::Vector3d& p : points) {
       // Column (i, j) spans [x0 + i h, x0 + (i + 1) h] in x.
       const double gx = (p.x() - s_.x0_) / s_.h_, gy = (p.y() - s_.y0_) / s_.h_;
-      const int i = static_cast<int>(std::floor(gx)), j = static_cast<int>(std::floor(gy));
+      const int i = column(gx), j = column(gy);
       out_.push_back(inside(0, i, j, p.z(), gx, gy) && inside(1, i, j, p.z(), gx, gy));
     }
     return out_;

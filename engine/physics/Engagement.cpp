@@ -121,6 +121,7 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
   const std::unique_ptr<MaterialReader> reader = stock.materialReader(afterStep);
 
   std::vector<EdgeSlice> slices;
+  std::vector<std::array<double, 2>> lead;  // per slice: sin and cos of its lead angle
   for (int k = 0; k < n; ++k) {
     EdgeSlice s;
     s.z = (k + 0.5) * dz;
@@ -132,17 +133,21 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
                          (s.z + d - std::max(0.0, s.z - d));
     s.kappa = std::atan2(1.0, slope);
     slices.push_back(s);
+    lead.push_back({std::sin(s.kappa), std::cos(s.kappa)});
   }
   // The edge's direction (from the axis) at immersion angle phi.
   auto direction = [&](double phi) -> Eigen::Vector2d {
     return std::sin(phi) * u + std::cos(phi) * v;
   };
-  // The point `out` outside the surface at slice s, angle phi.
-  auto point = [&](const EdgeSlice& s, double phi, double offset) {
-    const Eigen::Vector2d e = direction(phi);
-    const double reach = s.radius + offset * std::sin(s.kappa);
+  // The point `offset` outside the surface at height z of slice k (its radius there `r`),
+  // in direction e (direction(phi)).
+  auto pointAt = [&](std::size_t k, double z, double r, const Eigen::Vector2d& e, double offset) {
+    const double reach = r + offset * lead[k][0];
     return Eigen::Vector3d(tip.x() + reach * e.x(), tip.y() + reach * e.y(),
-                           tip.z() + s.z - offset * std::cos(s.kappa));
+                           tip.z() + z - offset * lead[k][1]);
+  };
+  auto point = [&](std::size_t k, const Eigen::Vector2d& e, double offset) {
+    return pointAt(k, slices[k].z, slices[k].radius, e, offset);
   };
   std::vector<Eigen::Vector3d> points;
   points.reserve(slices.size() * (kAngleSamples + 1));
@@ -160,8 +165,8 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     points.clear();
     for (const std::size_t k : list) {
       const EdgeSlice& s = slices[k];
-      const double reach = s.radius + eps * std::sin(s.kappa);
-      const double z = tip.z() + s.z - eps * std::cos(s.kappa);
+      const double reach = s.radius + eps * lead[k][0];
+      const double z = tip.z() + s.z - eps * lead[k][1];
       for (const Eigen::Vector2d& e : sample)
         points.emplace_back(tip.x() + reach * e.x(), tip.y() + reach * e.y(), z);
     }
@@ -223,21 +228,31 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     }
   // A wall's point `offset` beyond the edge in the slice's own plane (the wall's trace there;
   // the distance from the edge's surface at least `offset` on a sloping side).
-  auto wallPoint = [&](const EdgeSlice& s, double phi, double offset) {
-    const Eigen::Vector2d e = direction(phi);
-    const double reach = s.radius + offset / std::max(std::sin(s.kappa), kSteepest);
+  auto wallPoint = [&](std::size_t k, const Eigen::Vector2d& e, double offset) {
+    const EdgeSlice& s = slices[k];
+    const double reach = s.radius + offset / std::max(lead[k][0], kSteepest);
     return Eigen::Vector3d(tip.x() + reach * e.x(), tip.y() + reach * e.y(), tip.z() + s.z);
   };
+  // (The directions of an edge's ends carried along: the middle's is their normalized sum,
+  // its angle less than pi.)
+  std::vector<std::array<Eigen::Vector2d, 2>> ends;
   auto refine = [&](std::vector<Edge>& list, double offset, int rounds, bool wall = false) {
+    ends.resize(list.size());
+    for (std::size_t i = 0; i < list.size(); ++i)
+      ends[i] = {direction(list[i].lo), direction(list[i].hi)};
     for (int round = 0; round < rounds && !list.empty(); ++round) {
       points.clear();
-      for (const Edge& e : list)
-        points.push_back(wall ? wallPoint(slices[e.slice], 0.5 * (e.lo + e.hi), offset)
-                              : point(slices[e.slice], 0.5 * (e.lo + e.hi), offset));
+      for (std::size_t i = 0; i < list.size(); ++i) {
+        const Eigen::Vector2d e = (ends[i][0] + ends[i][1]).normalized();
+        points.push_back(wall ? wallPoint(list[i].slice, e, offset)
+                              : point(list[i].slice, e, offset));
+      }
       const std::vector<std::uint8_t>& mid = reader->read(points);
       for (std::size_t i = 0; i < list.size(); ++i) {
         Edge& e = list[i];
-        ((mid[i] != 0) == e.loIn ? e.lo : e.hi) = 0.5 * (e.lo + e.hi);
+        const bool low = (mid[i] != 0) == e.loIn;
+        (low ? e.lo : e.hi) = 0.5 * (e.lo + e.hi);
+        ends[i][low ? 0 : 1] = (ends[i][0] + ends[i][1]).normalized();
       }
     }
   };
@@ -282,47 +297,93 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
       wallOf.push_back(i);
     }
   constexpr std::size_t kWalls = kWallOffsets.size();
-  std::array<std::vector<Eigen::Vector2d>, kWalls> wallAt;  // [k][q]: walls[q]'s, or NaN
+  std::array<std::vector<Eigen::Vector2d>, kWalls> wallAt;       // [k][q]: walls[q]'s, or NaN
+  std::vector<std::array<std::uint8_t, kWallSamples + 1>> rows;  // a wall's samples read
+  std::vector<std::size_t> pending;                              // walls without a change yet
+  std::array<std::array<double, 2>, kWallSamples + 1> turn;      // cos, sin of sample j's turn
+  std::vector<std::array<double, 3>> firstAt;  // per wall: cos, sin of the first reading, it
+  for (const Edge& e : walls) {
+    const double at = 0.5 * (e.lo + e.hi);
+    firstAt.push_back({std::cos(at), std::sin(at), at});
+  }
+  for (std::size_t j = 0; j <= kWallSamples; ++j) {
+    const double d = -kReach + 2.0 * kReach * static_cast<double>(j) / kWallSamples;
+    turn[j] = {std::cos(d), std::sin(d)};
+  }
   for (std::size_t k = 0; k < kWalls; ++k) {
     const double offset = (stock.readingReach() + kWallOffsets[k]) * h;
     // Sampled every 3 degrees within kReach of the first reading: of the changes of the same
     // sense (the contact's side below if it was below), the one nearest that reading (a thin
-    // wall of stock beyond may hold a second change).
+    // wall of stock beyond may hold a second change). Read outwards from the first reading,
+    // a pair of samples a round, until a wall has its change: the gap between a change and the
+    // first reading grows with its rank on either side, by a sample on the other, so the
+    // first rank that holds one holds the nearest.
     // The j-th wall sample about the first reading `at`.
     auto sampleAngle = [](double at, int j) {
       return std::clamp(at - kReach + 2.0 * kReach * j / kWallSamples, 0.0, kPi);
     };
-    points.clear();
-    for (const Edge& e : walls)
-      for (int j = 0; j <= kWallSamples; ++j)
-        points.push_back(wallPoint(slices[e.slice], sampleAngle(0.5 * (e.lo + e.hi), j), offset));
-    const std::vector<std::uint8_t>& in = reader->read(points);
+    // Wall q's: the first reading's direction turned by the sample's angle from it, unless
+    // clamped.
+    auto sampleDirection = [&](std::size_t q, int j) -> Eigen::Vector2d {
+      const double phi = firstAt[q][2] - kReach + 2.0 * kReach * j / kWallSamples;
+      if (phi < 0.0 || phi > kPi) return direction(std::clamp(phi, 0.0, kPi));
+      const auto& [c, sn] = turn[static_cast<std::size_t>(j)];
+      const double ca = firstAt[q][0], sa = firstAt[q][1];
+      return (ca * c - sa * sn) * v + (sa * c + ca * sn) * u;
+    };
+    constexpr int kMiddle = kWallSamples / 2;  // the sample at the first reading
+    rows.assign(walls.size(), {});
+    pending.resize(walls.size());
+    for (std::size_t q = 0; q < walls.size(); ++q)
+      pending[q] = q;
     std::vector<Edge> found;
     std::vector<std::size_t> of;
-    for (std::size_t q = 0; q < walls.size(); ++q) {
-      const Edge& e = walls[q];
-      const double at = 0.5 * (e.lo + e.hi);
-      const std::uint8_t* row = in.data() + q * (kWallSamples + 1);
-      double best = kNaN, bestLo = 0.0, bestHi = 0.0;
-      for (int j = 0; j < kWallSamples; ++j) {
-        const double lo = sampleAngle(at, j), hi = sampleAngle(at, j + 1);
-        if ((row[j] != 0) != e.loIn || (row[j + 1] != 0) == e.loIn) continue;
-        const double gap = std::abs(0.5 * (lo + hi) - at);
-        if (std::isnan(best) || gap < best) {
-          best = gap;
-          bestLo = lo;
-          bestHi = hi;
+    for (int rank = 0; rank < kMiddle && !pending.empty(); ++rank) {
+      // This rank's changes lie between samples kMiddle - 1 - rank and kMiddle - rank (below)
+      // and kMiddle + rank and kMiddle + 1 + rank (above).
+      const std::array<int, 3> first{kMiddle - 1, kMiddle, kMiddle + 1};
+      const std::array<int, 2> more{kMiddle - 1 - rank, kMiddle + 1 + rank};
+      const int* newSamples = rank == 0 ? first.data() : more.data();
+      const std::size_t newCount = rank == 0 ? first.size() : more.size();
+      points.clear();
+      for (const std::size_t q : pending)
+        for (std::size_t t = 0; t < newCount; ++t)
+          points.push_back(wallPoint(walls[q].slice, sampleDirection(q, newSamples[t]), offset));
+      const std::vector<std::uint8_t>& in = reader->read(points);
+      std::size_t kept = 0;
+      for (std::size_t p = 0; p < pending.size(); ++p) {
+        const std::size_t q = pending[p];
+        const Edge& e = walls[q];
+        auto& row = rows[q];
+        for (std::size_t t = 0; t < newCount; ++t)
+          row[static_cast<std::size_t>(newSamples[t])] = in[p * newCount + t];
+        const double at = 0.5 * (e.lo + e.hi);
+        double best = kNaN, bestLo = 0.0, bestHi = 0.0;
+        for (const int j : {kMiddle - 1 - rank, kMiddle + rank}) {
+          const auto ju = static_cast<std::size_t>(j);
+          if ((row[ju] != 0) != e.loIn || (row[ju + 1] != 0) == e.loIn) continue;
+          const double lo = sampleAngle(at, j), hi = sampleAngle(at, j + 1);
+          const double gap = std::abs(0.5 * (lo + hi) - at);
+          if (std::isnan(best) || gap < best) {
+            best = gap;
+            bestLo = lo;
+            bestHi = hi;
+          }
         }
+        if (std::isnan(best)) {
+          pending[kept++] = q;
+          continue;
+        }
+        found.push_back({e.slice, bestLo, bestHi, e.loIn});
+        of.push_back(q);
       }
-      if (std::isnan(best)) continue;
-      found.push_back({e.slice, bestLo, bestHi, e.loIn});
-      of.push_back(q);
+      pending.resize(kept);
     }
     refine(found, offset, kRefinements, true);
     wallAt[k].assign(walls.size(), Eigen::Vector2d::Constant(kNaN));
     for (std::size_t q = 0; q < found.size(); ++q) {
       const Eigen::Vector3d p =
-          wallPoint(slices[found[q].slice], 0.5 * (found[q].lo + found[q].hi), offset);
+          wallPoint(found[q].slice, direction(0.5 * (found[q].lo + found[q].hi)), offset);
       wallAt[k][of[q]] = Eigen::Vector2d(p.x() - tip.x(), p.y() - tip.y());
     }
   }
@@ -454,18 +515,16 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
       if (a[1] - a[0] > best[1] - best[0]) best = a;
     return 0.5 * (best[0] + best[1]);
   };
-  auto at = [&](const EdgeSlice& s, double z, double phi) {
-    EdgeSlice q = s;
-    q.z = z;
-    q.radius = cutter.radiusAt(z);
-    return point(q, phi, eps);
+  // Slice k's point at height z, angle phi.
+  auto at = [&](std::size_t k, double z, double phi) {
+    return pointAt(k, z, cutter.radiusAt(z), direction(phi), eps);
   };
-  auto bisect = [&](const EdgeSlice& s, double in, double air, double phi) {
-    points.assign({at(s, air, phi)});
+  auto bisect = [&](std::size_t k, double in, double air, double phi) {
+    points.assign({at(k, air, phi)});
     if (reader->read(points)[0] != 0 || !(cutter.radiusAt(air) > 1e-9)) return kNaN;
     for (int round = 0; round < kRefinements + 4; ++round) {
       const double mid = 0.5 * (in + air);
-      points.assign({at(s, mid, phi)});
+      points.assign({at(k, mid, phi)});
       (reader->read(points)[0] != 0 ? in : air) = mid;
     }
     return 0.5 * (in + air);
@@ -474,7 +533,7 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     EdgeSlice& top = out.slices.back();
     const bool last = kept.back() + 1 == slices.size();
     const double bottom = top.z - 0.5 * top.dz;
-    const double end = bisect(top, top.z, last ? zTop : top.z + top.dz, widestMiddle(top));
+    const double end = bisect(kept.back(), top.z, last ? zTop : top.z + top.dz, widestMiddle(top));
     if (!std::isnan(end)) {
       top.dz = end - bottom;
       top.z = 0.5 * (bottom + end);
@@ -485,7 +544,7 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     EdgeSlice& low = out.slices.front();
     const double top = low.z + 0.5 * low.dz;
     if (kept.front() > 0 && low.z - low.dz > 0.0) {
-      const double end = bisect(low, low.z, low.z - low.dz, widestMiddle(low));
+      const double end = bisect(kept.front(), low.z, low.z - low.dz, widestMiddle(low));
       if (!std::isnan(end)) {
         low.dz = top - end;
         low.z = 0.5 * (top + end);
