@@ -1,5 +1,6 @@
 // A dexel stock's rays in stock.vdb, exactly: written as grids (VoxelStock::writeStockVdb)
-// and read back ray for ray (VoxelStock::dexelsFromVdb), in either layout.
+// and read back ray for ray (VoxelStock::dexelsFromVdb), in either layout; and a dexel run's
+// stock.vdb whose fractions are coarser than its rays (VoxelStock::writeDexelStockVdb).
 
 #include "cutters/Error.h"
 #include "stock/DexelStock.h"
@@ -8,8 +9,10 @@
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -163,3 +166,195 @@ std::optional<DexelStock> exactDexels(const std::string& path, double h) {
 }
 
 }  // namespace engage::voxel
+
+namespace engage {
+using namespace voxel;
+namespace {
+
+/// The highest and lowest material of a dexel stock's rays, mm (lo > hi: none).
+void rayHeights(const DexelStock& d, double& lo, double& hi) {
+  lo = std::numeric_limits<double>::infinity();
+  hi = -lo;
+  for (int j = 0; j < d.raysY(); ++j)
+    for (int i = 0; i < d.raysX(); ++i) {
+      const auto& ray = d.ray(i, j);
+      if (ray.empty()) continue;
+      lo = std::min(lo, ray.front().z0);
+      hi = std::max(hi, ray.back().z1);
+    }
+}
+
+/// A dexel stock's material as fractions on voxels `factor` (2, 4 or 8) times its spacing h,
+/// on the grid boxFiltered makes of its fractions at h (coarse voxel I over voxels factor I ..
+/// factor I + factor - 1): each interval's material added to the coarse voxels its column's
+/// footprint and heights overlap, one coarse row at a time, without the voxels at h.
+FloatGrid::Ptr coarseDexelFractions(const DexelStock& d, int factor) {
+  const double h = d.resolution();
+  const int shift = factor == 2 ? 1 : factor == 4 ? 2 : 3;
+  FloatGrid::Ptr grid = FloatGrid::create(0.0f);
+  openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(factor * h);
+  xf->postTranslate(openvdb::Vec3d(0.5 * (factor - 1) * h));
+  grid->setTransform(xf);
+  grid->setName("stock");
+  grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+  double zLow = 0.0, zHigh = 0.0;
+  rayHeights(d, zLow, zHigh);
+  if (!(zLow < zHigh)) return grid;
+  const ColumnFootprint corner(d);
+  const int nx = d.raysX(), ny = d.raysY();
+  // Heights in voxels at h: t = z / h + 1/2 (voxel k over [k, k + 1)); coarse K over
+  // [K factor, (K + 1) factor).
+  auto coarse = [&](double t) { return static_cast<int>(std::floor(t / factor)); };
+  const int k0 = coarse(zLow / h + 0.5), k1 = coarse(zHigh / h + 0.5);
+  const int a0 = corner.cx >> shift, a1 = (corner.cx + nx) >> shift;
+  const int b0 = corner.cy >> shift, b1 = (corner.cy + ny) >> shift;
+  const int na = a1 - a0 + 1, nb = b1 - b0 + 1, nk = k1 - k0 + 2;
+  // One coarse row's columns: the material of each coarse voxel (in voxels at h), and the
+  // changes of a level that covers whole coarse voxels.
+  std::vector<double> sum(static_cast<std::size_t>(na) * static_cast<std::size_t>(nk));
+  std::vector<double> level(sum.size());
+  auto at = [&](int a, int k) {
+    return static_cast<std::size_t>(a) * static_cast<std::size_t>(nk) + static_cast<std::size_t>(k);
+  };
+  // Material w per voxel height over heights [t0, t1] of coarse column a.
+  auto add = [&](int a, double t0, double t1, double w) {
+    const int q0 = coarse(t0) - k0, q1 = coarse(t1) - k0;
+    if (q0 == q1) {
+      sum[at(a, q0)] += w * (t1 - t0);
+      return;
+    }
+    sum[at(a, q0)] += w * ((q0 + k0 + 1) * factor - t0);
+    sum[at(a, q1)] += w * (t1 - (q1 + k0) * factor);
+    if (q1 > q0 + 1) {
+      level[at(a, q0 + 1)] += w * factor;
+      level[at(a, q1)] -= w * factor;
+    }
+  };
+  std::vector<FullRun> full(static_cast<std::size_t>(na) * static_cast<std::size_t>(nb));
+  auto acc = grid->getAccessor();
+  const double cell = static_cast<double>(factor) * factor * factor;
+  for (int b = b0; b <= b1; ++b) {
+    std::fill(sum.begin(), sum.end(), 0.0);
+    std::fill(level.begin(), level.end(), 0.0);
+    // The rays whose columns (at voxel rows cy + j and cy + j + 1) reach coarse row b.
+    const int jLow = std::max(0, b * factor - corner.cy - 1);
+    const int jHigh = std::min(ny - 1, b * factor + factor - 1 - corner.cy);
+    for (int j = jLow; j <= jHigh; ++j) {
+      double rowShare = 0.0;
+      if ((corner.cy + j) >> shift == b) rowShare += corner.wy;
+      if ((corner.cy + j + 1) >> shift == b) rowShare += 1.0 - corner.wy;
+      if (!(rowShare > 0.0)) continue;
+      for (int i = 0; i < nx; ++i) {
+        const auto& ray = d.ray(i, j);
+        const double w = rowShare * d.weight(i, j);
+        if (ray.empty() || !(w > 0.0)) continue;
+        const int first = ((corner.cx + i) >> shift) - a0;
+        const int second = ((corner.cx + i + 1) >> shift) - a0;
+        for (const DexelStock::Interval& iv : ray) {
+          const double t0 = iv.z0 / h + 0.5, t1 = iv.z1 / h + 0.5;
+          if (first == second) {
+            add(first, t0, t1, w * iv.f);
+          } else {
+            add(first, t0, t1, w * iv.f * corner.wx);
+            add(second, t0, t1, w * iv.f * (1.0 - corner.wx));
+          }
+        }
+      }
+    }
+    for (int a = 0; a < na; ++a) {
+      FullRun& run = full[static_cast<std::size_t>(b - b0) * static_cast<std::size_t>(na) +
+                          static_cast<std::size_t>(a)];
+      double whole = 0.0;
+      for (int q = 0; q < nk; ++q) {
+        whole += level[at(a, q)];
+        const auto v = static_cast<float>(std::min(1.0, (whole + sum[at(a, q)]) / cell));
+        if (!(v > 0.0f)) continue;
+        // (A column's first run of whole voxels as a run: boxes of 8 x 8 columns.)
+        if (v == 1.0f && (run.k0 > run.k1 || run.k1 == k0 + q - 1)) {
+          if (run.k0 > run.k1) run.k0 = k0 + q;
+          run.k1 = k0 + q;
+          continue;
+        }
+        acc.setValue(Coord(a0 + a, b, k0 + q), v);
+      }
+    }
+  }
+  acc.clear();
+  fillFullRuns(*grid, full, na, nb, a0, b0);
+  grid->tree().prune();
+  return grid;
+}
+
+}  // namespace
+
+int VoxelStock::dexelFileFactor(const DexelStock& d, double bandVoxels) {
+  const double h = d.resolution();
+  double zLow = 0.0, zHigh = 0.0;
+  rayHeights(d, zLow, zHigh);
+  if (!(zLow < zHigh)) return 1;
+  const double x = d.raysX() + 1.0, y = d.raysY() + 1.0, z = (zHigh - zLow) / h + 1.0;
+  double partial = 0.0;
+  for (int j = 0; j < d.raysY(); ++j)
+    for (int i = 0; i < d.raysX(); ++i) {
+      const auto& ray = d.ray(i, j);
+      for (const DexelStock::Interval& iv : ray)
+        partial += 2.0 + (iv.f < 1.0 ? (iv.z1 - iv.z0) / h : 0.0);
+      if (!ray.empty() && d.weight(i, j) < 1.0) partial += (ray.back().z1 - ray.front().z0) / h;
+    }
+  const double band = 7.0 * (2.0 * (x * y + y * z + z * x) + partial);
+  int c = 1;
+  while (c < 8 && band / (c * c) > bandVoxels)
+    c *= 2;
+  return c;
+}
+
+void VoxelStock::writeDexelStockVdb(const DexelStock& rays, const std::string& path,
+                                    double bandVoxels) {
+  const int factor = dexelFileFactor(rays, bandVoxels);
+  if (factor == 1) {
+    fromDexels(rays).writeStockVdb(path, &rays);
+    return;
+  }
+  initVdb();
+  const double h = rays.resolution();
+  const FloatGrid::Ptr fractions = coarseDexelFractions(rays, factor);
+  const FloatGrid::Ptr surface =
+      surfaceLevelSet(*fractions, factor * h, 3, isoSurface(*fractions, 0.0).points);
+  // The box the voxels at h would cover (fileBounds), the fractions' factor.
+  const ColumnFootprint corner(rays);
+  int iLow = rays.raysX(), iHigh = -1, jLow = rays.raysY(), jHigh = -1;
+  for (int j = 0; j < rays.raysY(); ++j)
+    for (int i = 0; i < rays.raysX(); ++i)
+      if (!rays.ray(i, j).empty() && rays.weight(i, j) > 0.0) {
+        iLow = std::min(iLow, i);
+        iHigh = std::max(iHigh, i);
+        jLow = std::min(jLow, j);
+        jHigh = std::max(jHigh, j);
+      }
+  double zLow = 0.0, zHigh = 0.0;
+  rayHeights(rays, zLow, zHigh);
+  auto voxel = [&](double z) { return std::floor(z / h + 0.5); };
+  const openvdb::Vec3d lo((corner.cx + iLow + (corner.wx > 0.0 ? 0 : 1) - 0.5) * h,
+                          (corner.cy + jLow + (corner.wy > 0.0 ? 0 : 1) - 0.5) * h,
+                          (voxel(zLow) - 0.5) * h);
+  const openvdb::Vec3d hi((corner.cx + iHigh + (corner.wx < 1.0 ? 1 : 0) + 0.5) * h,
+                          (corner.cy + jHigh + (corner.wy < 1.0 ? 1 : 0) + 0.5) * h,
+                          (voxel(zHigh) + 0.5) * h);
+  fractions->insertMeta("dexel_coarser", openvdb::Int32Metadata(factor));
+  fractions->insertMeta("material_min", openvdb::Vec3DMetadata(lo));
+  fractions->insertMeta("material_max", openvdb::Vec3DMetadata(hi));
+  openvdb::GridPtrVec grids{fractions, surface};
+  for (int i = 0; i < 3; ++i) {  // (none: a dexel stock's voxels keep no planes)
+    openvdb::Vec3SGrid::Ptr planes = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    planes->setTransform(fractions->transform().copy());
+    planes->setName("planes_" + std::to_string(i));
+    planes->setGridClass(openvdb::GRID_UNKNOWN);
+    grids.push_back(planes);
+  }
+  for (const openvdb::GridBase::Ptr& g :
+       dexelGrids(rays, *openvdb::math::Transform::createLinearTransform(h)))
+    grids.push_back(g);
+  writeVdb(path, grids);
+}
+
+}  // namespace engage

@@ -6,6 +6,7 @@
 /// surface (VoxelSurface.cpp) each use.
 
 #include "cutters/AptCutter.h"
+#include "stock/DexelStock.h"
 #include "stock/TriangleMesh.h"
 #include "stock/VoxelPlanes.h"
 #include "stock/VoxelStock.h"
@@ -65,9 +66,8 @@ FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
 /// The voxels of the grid's leaves whose fraction is strictly between 0 and 1.
 std::size_t partialVoxels(const FloatGrid& grid);
 
-/// Most voxels stock.vdb's level set may have (about 10 bytes each while it is made, 4 in the
-/// file): about 3 layers on each side of a surface of 330 mm^2 at 0.01 mm.
-constexpr double kFileBandVoxels = 2e7;
+/// Most voxels stock.vdb's level set may have (VoxelStock::kFileBandVoxels).
+constexpr double kFileBandVoxels = VoxelStock::kFileBandVoxels;
 
 /// The factor (1, 2, 4 or 8) by which stock.vdb's level set is coarser than the grid: the
 /// least that keeps its band, about 7 layers over the surface's area (the grid's bounds' faces
@@ -86,6 +86,52 @@ std::optional<DexelStock> exactDexels(const std::string& path, double h);
 /// The fractions averaged over blocks of factor^3 voxels (factor 2, 4 or 8) on a grid that
 /// many times coarser (VoxelSurface.cpp); the volume is kept.
 FloatGrid::Ptr boxFiltered(const FloatGrid& grid, double h, int factor);
+
+/// How a dexel stock's columns lie on voxel columns of the same spacing h: dexel column (i, j)
+/// covers [x0 + i h, x0 + (i + 1) h] (and likewise in y), voxel c covers [(c - 1/2) h,
+/// (c + 1/2) h], so each dexel column overlaps four voxel columns and each voxel column
+/// (cx + a, cy + b) the dexel columns a - 1 .. a, b - 1 .. b.
+struct ColumnFootprint {
+  int cx = 0, cy = 0;         // the first voxel column of dexel column (0, 0); the others + 1
+  double wx = 0.0, wy = 0.0;  // the share of a dexel column in its first voxel column's x (y)
+
+  explicit ColumnFootprint(const DexelStock& d) {
+    const double h = d.resolution();
+    auto first = [&](double a0, int& c0, double& w0) {  // the voxels over [a0, a0 + h]
+      c0 = static_cast<int>(std::floor(a0 / h + 0.5));
+      w0 = ((c0 + 0.5) * h - a0) / h;
+    };
+    first(d.originX(), cx, wx);
+    first(d.originY(), cy, wy);
+  }
+  /// The share of a dexel column in the voxel column (a, b) of its four, a and b 0 or 1.
+  double share(int a, int b) const { return (a ? 1.0 - wx : wx) * (b ? 1.0 - wy : wy); }
+  /// fn(i, j, share) for each dexel column of `d` that voxel column (cx + a, cy + b) overlaps,
+  /// with the share of that dexel column in it, where it is above 0.
+  template <typename Fn>
+  void columnsOf(const DexelStock& d, int a, int b, Fn&& fn) const {
+    for (int di = 0; di < 2; ++di)
+      for (int dj = 0; dj < 2; ++dj) {
+        const int i = a - di, j = b - dj;
+        if (i < 0 || i >= d.raysX() || j < 0 || j >= d.raysY()) continue;
+        const double s = share(di, dj);
+        if (s > 0.0) fn(i, j, s);
+      }
+  }
+};
+
+/// A dexel stock's material as fractions on voxels of its ray spacing (VoxelStock::fromDexels).
+FloatGrid::Ptr dexelFractions(const DexelStock& d);
+
+/// A column's whole voxels: heights [k0, k1] (none when k0 > k1).
+struct FullRun {
+  int k0 = 1, k1 = 0;
+};
+/// Set the whole voxels of columns (cx + a, cy + b), a < ax, b < by, runs[b ax + a], to 1:
+/// the heights all columns of each block of 8 x 8 share as one box (tiles where it covers
+/// whole nodes), the rest voxel by voxel.
+void fillFullRuns(FloatGrid& grid, const std::vector<FullRun>& runs, int ax, int by, int cx,
+                  int cy);
 
 }  // namespace engage::voxel
 

@@ -70,6 +70,10 @@ class VoxelStock : public Stock {
   /// (the active voxels' bounds OpenVDB writes with each grid) without reading the grid;
   /// nullopt when the file or that metadata cannot be read (fromVdb then says why).
   static std::optional<Box3> fileBounds(const std::string& path);
+  /// The material grid "stock" of a stock.vdb holds as written: its fractions' sum times its
+  /// voxels' volume, mm^3, at its own cell (a dexel run's coarser fractions as they are, not
+  /// its rays). Throws Error for a file that cannot be read or has no such float grid.
+  static double fileVolume(const std::string& path);
   /// The same stock as dexels of spacing h: a dexel run's own rays where the file holds them
   /// at this spacing (writeStockVdb), exactly; else each column of the resampled voxels
   /// becomes a ray: a partial voxel whose fractions change mostly along z is a shorter piece
@@ -123,6 +127,23 @@ class VoxelStock : public Stock {
   /// as metadata, which dexelsFromVdb reads back at the same spacing. Written to a temporary
   /// name and renamed when complete. Throws Error on I/O failure.
   void writeStockVdb(const std::string& path, const DexelStock* rays = nullptr) const;
+  /// Write a dexel run's stock.vdb: fromDexels(rays).writeStockVdb(path, &rays), unless the
+  /// surface's band at the rays' spacing would exceed `bandVoxels` (a fine tool's grid over a
+  /// whole board: dexelFileFactor > 1). Then grid "stock" holds the fractions averaged over
+  /// blocks of that factor^3 voxels (metadata "dexel_coarser": the factor; "material_min" and
+  /// "material_max": the box fromDexels' voxels would cover, mm), made from the rays without
+  /// the voxels at their spacing, and "surface" is made from it; the rays are written exactly
+  /// as always, and a run from the file (fromVdb, dexelsFromVdb, fileBounds) reads them.
+  static void writeDexelStockVdb(const DexelStock& rays, const std::string& path,
+                                 double bandVoxels = kFileBandVoxels);
+  /// The factor (1, 2, 4 or 8) by which writeDexelStockVdb's fractions and surface are coarser
+  /// than the rays: the least that keeps the surface's band, about 7 layers over the rays'
+  /// box's faces and a voxel's face for each partial voxel (two for each interval, one for
+  /// each cell height of a partly covered column), within bandVoxels.
+  static int dexelFileFactor(const DexelStock& rays, double bandVoxels = kFileBandVoxels);
+  /// Most voxels stock.vdb's level set may have (about 10 bytes each while it is made, 4 in the
+  /// file): about 3 layers on each side of a surface of 330 mm^2 at 0.01 mm.
+  static constexpr double kFileBandVoxels = 2e7;
   /// The signed distance (mm, negative inside) to the stock's surface, the 0.5 iso-surface of
   /// the fractions, at each voxel centre within 3 voxels of it: stock.vdb's grid "surface".
   std::vector<std::pair<Eigen::Vector3d, double>> surfaceBand() const;

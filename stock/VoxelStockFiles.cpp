@@ -60,39 +60,6 @@ class CheckedArchive : public openvdb::io::Archive {
   }
 };
 
-/// How a dexel stock's columns lie on voxel columns of the same spacing h: dexel column (i, j)
-/// covers [x0 + i h, x0 + (i + 1) h] (and likewise in y), voxel c covers [(c - 1/2) h,
-/// (c + 1/2) h], so each dexel column overlaps four voxel columns and each voxel column
-/// (cx + a, cy + b) the dexel columns a - 1 .. a, b - 1 .. b.
-struct ColumnFootprint {
-  int cx = 0, cy = 0;         // the first voxel column of dexel column (0, 0); the others + 1
-  double wx = 0.0, wy = 0.0;  // the share of a dexel column in its first voxel column's x (y)
-
-  explicit ColumnFootprint(const DexelStock& d) {
-    const double h = d.resolution();
-    auto first = [&](double a0, int& c0, double& w0) {  // the voxels over [a0, a0 + h]
-      c0 = static_cast<int>(std::floor(a0 / h + 0.5));
-      w0 = ((c0 + 0.5) * h - a0) / h;
-    };
-    first(d.originX(), cx, wx);
-    first(d.originY(), cy, wy);
-  }
-  /// The share of a dexel column in the voxel column (a, b) of its four, a and b 0 or 1.
-  double share(int a, int b) const { return (a ? 1.0 - wx : wx) * (b ? 1.0 - wy : wy); }
-  /// fn(i, j, share) for each dexel column of `d` that voxel column (cx + a, cy + b) overlaps,
-  /// with the share of that dexel column in it, where it is above 0.
-  template <typename Fn>
-  void columnsOf(const DexelStock& d, int a, int b, Fn&& fn) const {
-    for (int di = 0; di < 2; ++di)
-      for (int dj = 0; dj < 2; ++dj) {
-        const int i = a - di, j = b - dj;
-        if (i < 0 || i >= d.raysX() || j < 0 || j >= d.raysY()) continue;
-        const double s = share(di, dj);
-        if (s > 0.0) fn(i, j, s);
-      }
-  }
-};
-
 /// The outward normal of the material at voxel c from its neighbours' fractions (central
 /// differences), zero where they do not change.
 Eigen::Vector3d fractionNormal(const FloatGrid::ConstAccessor& acc, const Coord& c) {
@@ -170,6 +137,19 @@ StockFile readStockGrid(const std::string& path) {
   if (!grid)
     throw ParameterError("grid 'stock' of '" + path + "' holds " + base->valueType() +
                          " values, not float material fractions");
+  // A dexel run's fractions coarser than its rays (VoxelStock::writeDexelStockVdb): the
+  // fractions at the rays' spacing, from the rays, as a file of finer ones holds them.
+  if (const auto coarser = grid->getMetadata<openvdb::Int32Metadata>("dexel_coarser");
+      coarser && coarser->value() > 1) {
+    const double spacing = grid->transform().voxelSize()[0] / coarser->value();
+    const std::optional<DexelStock> rays = exactDexels(path, spacing);
+    if (!rays)
+      throw ParameterError("stock '" + path + "' holds its fractions " +
+                           std::to_string(coarser->value()) +
+                           " times coarser than its rays, and the rays (grids dexel_z0, "
+                           "dexel_z1, dexel_f, dexel_weight) cannot be read");
+    grid = dexelFractions(*rays);
+  }
   const openvdb::math::Transform& xf = grid->transform();
   const openvdb::Vec3d o = xf.indexToWorld(openvdb::Vec3d(0.0));
   const double h0 = xf.voxelSize()[0];
@@ -438,17 +418,47 @@ void writeVdb(const std::string& path, const openvdb::GridPtrVec& grids) {
   writeFileAtomically(path, [&](std::ostream& os) { CheckedArchive().writeTo(os, grids); });
 }
 
+void fillFullRuns(FloatGrid& grid, const std::vector<FullRun>& runs, int ax, int by, int cx,
+                  int cy) {
+  auto acc = grid.getAccessor();
+  for (int b0 = 0; b0 < by; b0 += 8)
+    for (int a0 = 0; a0 < ax; a0 += 8) {
+      // The heights every column of the block is full at, as one box.
+      int k0 = std::numeric_limits<int>::min(), k1 = std::numeric_limits<int>::max();
+      for (int b = b0; b < std::min(by, b0 + 8); ++b)
+        for (int a = a0; a < std::min(ax, a0 + 8); ++a) {
+          const FullRun& run = runs[static_cast<std::size_t>(b) * static_cast<std::size_t>(ax) +
+                                    static_cast<std::size_t>(a)];
+          k0 = std::max(k0, run.k0);
+          k1 = std::min(k1, run.k1);
+        }
+      if (k0 <= k1)
+        grid.tree().fill(
+            CoordBBox(Coord(cx + a0, cy + b0, k0),
+                      Coord(cx + std::min(ax, a0 + 8) - 1, cy + std::min(by, b0 + 8) - 1, k1)),
+            1.0f, true);
+      acc.clear();  // (the box may have replaced nodes the accessor holds)
+      for (int b = b0; b < std::min(by, b0 + 8); ++b)
+        for (int a = a0; a < std::min(ax, a0 + 8); ++a) {
+          const FullRun& run = runs[static_cast<std::size_t>(b) * static_cast<std::size_t>(ax) +
+                                    static_cast<std::size_t>(a)];
+          for (int k = run.k0; k <= run.k1; ++k)
+            if (k < k0 || k > k1) acc.setValue(Coord(cx + a, cy + b, k), 1.0f);
+        }
+    }
+}
+
 }  // namespace voxel
 
-VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
+namespace voxel {
+
+FloatGrid::Ptr dexelFractions(const DexelStock& d) {
   initVdb();
-  auto impl = std::make_unique<Impl>();
   const double h = d.resolution();
-  impl->h = h;
-  impl->grid = FloatGrid::create(0.0f);
-  impl->grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
-  impl->grid->setName("stock");
-  impl->grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+  FloatGrid::Ptr grid = FloatGrid::create(0.0f);
+  grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+  grid->setName("stock");
+  grid->setGridClass(openvdb::GRID_FOG_VOLUME);
   // Each voxel gets the material of the columns it overlaps: volume share x the interval's
   // share x the column's weight. Voxel column by voxel column, its four dexel columns' material
   // merged (as writeRemovedVdb merges their losses); the voxels below 1
@@ -458,11 +468,8 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
   const ColumnFootprint corner(d);
   const int nx = d.raysX(), ny = d.raysY();
   const int ax = nx + 1, by = ny + 1;  // voxel columns (corner.cx + a, corner.cy + b)
-  struct FullRun {
-    int k0 = 1, k1 = 0;  // [k0, k1] all 1; empty when k0 > k1
-  };
   std::vector<FullRun> full(static_cast<std::size_t>(ax) * static_cast<std::size_t>(by));
-  auto acc = impl->grid->getAccessor();
+  auto acc = grid->getAccessor();
   std::vector<std::pair<int, double>> levels, pieces;  // (voxel height, material)
   for (int b = 0; b < by; ++b)
     for (int a = 0; a < ax; ++a) {
@@ -546,32 +553,18 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
         k = next;
       }
     }
-  for (int b0 = 0; b0 < by; b0 += 8)
-    for (int a0 = 0; a0 < ax; a0 += 8) {
-      // The heights every column of the block is full at, as one box.
-      int k0 = std::numeric_limits<int>::min(), k1 = std::numeric_limits<int>::max();
-      for (int b = b0; b < std::min(by, b0 + 8); ++b)
-        for (int a = a0; a < std::min(ax, a0 + 8); ++a) {
-          const FullRun& run = full[static_cast<std::size_t>(b) * static_cast<std::size_t>(ax) +
-                                    static_cast<std::size_t>(a)];
-          k0 = std::max(k0, run.k0);
-          k1 = std::min(k1, run.k1);
-        }
-      if (k0 <= k1)
-        impl->grid->tree().fill(CoordBBox(Coord(corner.cx + a0, corner.cy + b0, k0),
-                                          Coord(corner.cx + std::min(ax, a0 + 8) - 1,
-                                                corner.cy + std::min(by, b0 + 8) - 1, k1)),
-                                1.0f, true);
-      acc.clear();  // (the box may have replaced nodes the accessor holds)
-      for (int b = b0; b < std::min(by, b0 + 8); ++b)
-        for (int a = a0; a < std::min(ax, a0 + 8); ++a) {
-          const FullRun& run = full[static_cast<std::size_t>(b) * static_cast<std::size_t>(ax) +
-                                    static_cast<std::size_t>(a)];
-          for (int k = run.k0; k <= run.k1; ++k)
-            if (k < k0 || k > k1) acc.setValue(Coord(corner.cx + a, corner.cy + b, k), 1.0f);
-        }
-    }
-  impl->grid->tree().prune();
+  acc.clear();
+  fillFullRuns(*grid, full, ax, by, corner.cx, corner.cy);
+  grid->tree().prune();
+  return grid;
+}
+
+}  // namespace voxel
+
+VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
+  auto impl = std::make_unique<Impl>();
+  impl->h = d.resolution();
+  impl->grid = dexelFractions(d);
   return VoxelStock(std::move(impl));
 }
 
@@ -648,6 +641,17 @@ std::optional<Box3> VoxelStock::fileBounds(const std::string& path) {
     if (!file.hasGrid("stock")) return std::nullopt;
     const openvdb::GridBase::ConstPtr meta = file.readGridMetadata("stock");
     file.close();
+    if (meta->getMetadata<openvdb::Int32Metadata>("dexel_coarser")) {
+      const auto lo = meta->getMetadata<openvdb::Vec3DMetadata>("material_min");
+      const auto hi = meta->getMetadata<openvdb::Vec3DMetadata>("material_max");
+      if (!lo || !hi) return std::nullopt;
+      Box3 box;
+      for (int k = 0; k < 3; ++k) {
+        box.min[k] = lo->value()[k];
+        box.max[k] = hi->value()[k];
+      }
+      return box;
+    }
     const auto lo = meta->getMetadata<openvdb::Vec3IMetadata>("file_bbox_min");
     const auto hi = meta->getMetadata<openvdb::Vec3IMetadata>("file_bbox_max");
     const openvdb::math::Transform& xf = meta->transform();
@@ -663,6 +667,25 @@ std::optional<Box3> VoxelStock::fileBounds(const std::string& path) {
   } catch (const openvdb::Exception&) {
     return std::nullopt;
   }
+}
+
+double VoxelStock::fileVolume(const std::string& path) {
+  initVdb();
+  FloatGrid::Ptr grid;
+  try {
+    openvdb::io::File file(path);
+    file.open(false);
+    if (file.hasGrid("stock")) grid = openvdb::gridPtrCast<FloatGrid>(file.readGrid("stock"));
+    file.close();
+  } catch (const openvdb::Exception& e) {
+    throw Error("cannot read stock '" + path + "' as an OpenVDB file: " + e.what());
+  }
+  if (!grid) throw Error("stock '" + path + "' has no float grid named 'stock'");
+  double sum = 0.0;
+  for (auto it = grid->cbeginValueOn(); it; ++it)
+    sum += static_cast<double>(*it) * static_cast<double>(it.getVoxelCount());
+  const double h = grid->transform().voxelSize()[0];
+  return sum * h * h * h;
 }
 
 VoxelStock VoxelStock::fromVdb(const std::string& path, double h) {

@@ -23,7 +23,9 @@ const VoxelStock* StockView::voxels() const {
   if (const auto* voxels = dynamic_cast<const VoxelStock*>(result_.stock.get())) return voxels;
   const auto* dexels = dynamic_cast<const DexelStock*>(result_.stock.get());
   if (!dexels) return nullptr;
-  if (!converted_) converted_ = std::make_unique<VoxelStock>(VoxelStock::fromDexels(*dexels));
+  std::call_once(convert_, [&] {
+    converted_ = std::make_unique<VoxelStock>(VoxelStock::fromDexels(*dexels));
+  });
   return converted_.get();
 }
 
@@ -63,9 +65,22 @@ std::size_t writeStockFiles(const RunResult& result, const StockView& view,
       if (e) std::rethrow_exception(e);
   };
   // A dexel stock: its removal from its own record, its material as voxel fractions, for the
-  // same viewers.
+  // same viewers (coarser than its rays straight from them, where the grid is large).
   const auto* dexels = dynamic_cast<const DexelStock*>(result.stock.get());
   if (dexels) run(0, [&] { VoxelStock::writeRemovedVdb(*dexels, (dir / "removed.vdb").string()); });
+  std::size_t openEdges = 0;
+  auto stl = [&] {
+    const TriangleMesh mesh = view.surface(result.job.stlTriangles);
+    writeStl(mesh, (dir / "stock.stl").string());
+    openEdges = boundaryEdgeCount(mesh);
+  };
+  if (dexels && VoxelStock::dexelFileFactor(*dexels) > 1) {
+    run(1, [&] { VoxelStock::writeDexelStockVdb(*dexels, (dir / "stock.vdb").string()); });
+    run(2, stl);
+    if (alongside) run(3, alongside);
+    finish();
+    return openEdges;
+  }
   const VoxelStock* shown = nullptr;
   try {
     shown = view.voxels();  // (a dexel stock converted while its removed.vdb is written)
@@ -79,18 +94,15 @@ std::size_t writeStockFiles(const RunResult& result, const StockView& view,
   }
   if (!dexels) run(0, [&] { shown->writeRemovedVdb((dir / "removed.vdb").string()); });
   run(1, [&] { shown->writeStockVdb((dir / "stock.vdb").string(), dexels); });
-  std::size_t openEdges = 0;
-  run(2, [&] {
-    const TriangleMesh mesh = view.surface(result.job.stlTriangles);
-    writeStl(mesh, (dir / "stock.stl").string());
-    openEdges = boundaryEdgeCount(mesh);
-  });
+  run(2, stl);
   if (alongside) run(3, alongside);
   finish();
   return openEdges;
 }
 
 void writeStockVdb(const StockView& view, const std::filesystem::path& dir) {
+  if (const DexelStock* dexels = view.dexels(); dexels && VoxelStock::dexelFileFactor(*dexels) > 1)
+    return VoxelStock::writeDexelStockVdb(*dexels, (dir / "stock.vdb").string());
   if (const VoxelStock* shown = view.voxels())
     shown->writeStockVdb((dir / "stock.vdb").string(), view.dexels());
 }

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 
 namespace engage {
@@ -21,8 +22,8 @@ class DexelStock;
 class VoxelStock;
 
 /// A run's final stock as voxels, for the files and the report's 3D view that show it: the
-/// voxel stock itself, or a dexel stock's rays as voxel fractions, converted on first use and
-/// once for all the files and the report.
+/// voxel stock itself, or a dexel stock's rays as voxel fractions, converted on first use (by
+/// whichever thread asks first) and once for all the files and the report.
 class StockView {
  public:
   explicit StockView(const RunResult& result);
@@ -37,12 +38,13 @@ class StockView {
   /// vertices' spacing: a dexel stock's straight from its rays where it is a heightfield
   /// (stock/DexelMesh.h: a tenth of a second where meshing its voxels takes seconds), else
   /// the voxels' (VoxelStock::viewMesh; with 0 their full surface). Safe from several
-  /// threads once voxels() has been called (it converts on first use, writeStockFiles first).
+  /// threads.
   TriangleMesh surface(std::size_t maxTriangles, double* cell = nullptr) const;
 
  private:
   const RunResult& result_;
   mutable std::unique_ptr<VoxelStock> converted_;
+  mutable std::once_flag convert_;
 };
 
 /// Write the three files into `dir`, side by side on the cores there are, with `alongside()`

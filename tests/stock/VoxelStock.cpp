@@ -545,6 +545,74 @@ TEST_CASE("a dexel stock written to stock.vdb comes back ray for ray", "[stock][
   std::filesystem::remove(path);
 }
 
+TEST_CASE(
+    "a dexel run's stock.vdb of a large grid: fractions coarser than the rays, the rays exact",
+    "[stock][vdb]") {
+  // The band estimate on a box on the ray lattice (h 0.25, 6 x 4.5 x 3 mm: 24 x 18 rays, each
+  // one whole interval): 7 (2 (25 x 19 + 19 x 13 + 13 x 25) + 2 x 24 x 18) = 20,706 voxels
+  // (the bounds' faces in voxels, 25 x 19 x 13, and two partial voxels a ray), by hand.
+  const double h = 0.25;
+  Box3 b;
+  b.min = {0.0, 0.0, -3.0};
+  b.max = {6.0, 4.5, 0.0};
+  const DexelStock box = DexelStock::box(b, h);
+  REQUIRE(box.raysX() == 24);
+  REQUIRE(box.raysY() == 18);
+  const double band = 20706.0;
+  CHECK(VoxelStock::dexelFileFactor(box, band) == 1);
+  CHECK(VoxelStock::dexelFileFactor(box, band - 1.0) == 2);        // band / 4 fits
+  CHECK(VoxelStock::dexelFileFactor(box, band / 4.0 - 1.0) == 4);  // band / 16 fits
+  CHECK(VoxelStock::dexelFileFactor(box, band / 16.0 - 1.0) == 8);
+  CHECK(VoxelStock::dexelFileFactor(box, 1.0) == 8);  // (8 at most)
+  // Written at factor 4 (band / 16 = 1294 fits 2000): 1 mm voxels whose centres lie at
+  // 0.375 mm + k mm; the box's 81 mm^3 in 32-bit fractions (0.875 and 0.125 at its faces,
+  // exact in binary); bounds as the voxels at h would have them, half a voxel (0.125 mm) out.
+  const std::string coarse = tempVdb("dexel_coarse.vdb"), fine = tempVdb("dexel_fine.vdb");
+  VoxelStock::writeDexelStockVdb(box, coarse, 2000.0);
+  CHECK(VoxelStock::fileVolume(coarse) == Approx(81.0).epsilon(1e-9));
+  const std::optional<Box3> bounds = VoxelStock::fileBounds(coarse);
+  REQUIRE(bounds);
+  CHECK(bounds->min.isApprox(Eigen::Vector3d(-0.125, -0.125, -3.125), 1e-12));
+  CHECK(bounds->max.isApprox(Eigen::Vector3d(6.125, 4.625, 0.125), 1e-12));
+  VoxelStock::fromDexels(box).writeStockVdb(fine, &box);
+  const std::optional<Box3> fineBounds = VoxelStock::fileBounds(fine);
+  REQUIRE(fineBounds);
+  CHECK(fineBounds->min.isApprox(bounds->min, 1e-12));
+  CHECK(fineBounds->max.isApprox(bounds->max, 1e-12));
+
+  // A box off the lattice, a slot and a ramp cut (as above), at each factor: the rays come
+  // back exactly, a voxel run from the file starts from the voxels fromDexels makes of them
+  // (to the bit), and the coarse fractions keep the stock's volume (to 32-bit floats).
+  b.min = {0.05, 0.1, -10.0};
+  b.max = {40.0, 20.02, 0.0};
+  const double hc = 0.3;
+  DexelStock d = DexelStock::box(b, hc);
+  const AptCutter c = AptCutter::flat(6.0, 18.0);
+  auto cuts = [&](Stock& s) {
+    double v = s.remove(Sweep(c, line({-5.0, 10.0, -2.0}, {45.0, 10.0, -2.0}), hc)).volume;
+    v += s.remove(Sweep(c, line({5.0, 3.0, 0.5}, {35.0, 17.0, -3.1}), hc)).volume;
+    return v;
+  };
+  REQUIRE(cuts(d) > 400.0);
+  const double voxels = VoxelStock::fromDexels(d).volume();
+  for (const int factor : {2, 4, 8}) {
+    double budget = 1e9;  // the largest band budget that asks for this factor
+    while (budget > 1.0 && VoxelStock::dexelFileFactor(d, budget) < factor)
+      budget /= 2.0;
+    REQUIRE(VoxelStock::dexelFileFactor(d, budget) == factor);
+    VoxelStock::writeDexelStockVdb(d, coarse, budget);
+    CHECK(VoxelStock::fileVolume(coarse) == Approx(d.volume()).epsilon(1e-6));
+    DexelStock back = VoxelStock::dexelsFromVdb(coarse, hc);
+    CHECK(back.volume() == d.volume());
+    CHECK(back.segments() == d.segments());
+    CHECK(cuts(back) == 0.0);
+    CHECK(VoxelStock::fromVdb(coarse, hc).volume() == voxels);
+    CHECK(VoxelStock::dexelsFromVdb(coarse, 0.25).volume() == Approx(d.volume()).epsilon(1e-4));
+  }
+  std::filesystem::remove(coarse);
+  std::filesystem::remove(fine);
+}
+
 TEST_CASE("a dexel run's stock.vdb of the first layout is still read ray for ray", "[stock][vdb]") {
   // Written by the build before the packed layout (5f33fb8): `engage simulate` of a 2 mm flat
   // end mill 1 mm deep across a 6 x 5 x 3 mm box at 0.3 mm (tests/data/dexel_slot_layout1.vdb;
