@@ -93,6 +93,15 @@ void endUnstoppedRun() {
 /// allocation (which is then tried again), so that the run can unwind, remove what it was
 /// writing and say why; the next failure throws std::bad_alloc.
 char* memoryReserve = nullptr;
+/// And a little more for removing what was being written (removeUnfinished allocates as it
+/// walks a folder), given back just before that.
+char* cleanupReserve = nullptr;
+
+void removeUnfinishedWithReserve() {
+  delete[] cleanupReserve;
+  cleanupReserve = nullptr;
+  engage::removeUnfinished();
+}
 
 void onAllocationFailure() {
   if (memoryReserve) {
@@ -107,7 +116,7 @@ void onAllocationFailure() {
 /// without a catch): what was being written is removed; out of memory exits 8, anything else
 /// aborts as before.
 [[noreturn]] void onTerminate() {
-  engage::removeUnfinished();
+  removeUnfinishedWithReserve();
   if (const std::exception_ptr e = std::current_exception()) {
     try {
       std::rethrow_exception(e);
@@ -210,6 +219,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   memoryReserve = new char[64 << 20];
+  cleanupReserve = new char[8 << 20];
   std::set_new_handler(onAllocationFailure);
   std::set_terminate(onTerminate);
   sem_init(&stopPosted, 0, 0);
@@ -222,6 +232,7 @@ int main(int argc, char** argv) {
     say(kInterrupted);
     return 130;
   } catch (const std::bad_alloc&) {
+    removeUnfinishedWithReserve();  // (what unwinding could not remove without memory)
     say(kOutOfMemory);
     return 8;
   } catch (const engage::UnmetLimitError& e) {

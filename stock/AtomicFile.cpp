@@ -33,6 +33,10 @@ Unfinished::Unfinished(std::filesystem::path path) : path_(std::move(path)) {
 }
 
 Unfinished::~Unfinished() {
+  // A path its owner could not remove (out of memory while unwinding: the removal allocates)
+  // stays registered, for removeUnfinished once the run's memory is given back.
+  std::error_code ec;
+  if (registered_ && std::filesystem::exists(path_, ec)) return;
   release();
 }
 

@@ -25,6 +25,8 @@ void writeFileAtomically(const std::string& path, const std::function<void(std::
 class Unfinished {
  public:
   explicit Unfinished(std::filesystem::path path);
+  /// Unregisters the path, unless it is still there and was not released: its owner could not
+  /// remove it (out of memory), and removeUnfinished is to.
   ~Unfinished();
   Unfinished(const Unfinished&) = delete;
   Unfinished& operator=(const Unfinished&) = delete;

@@ -54,6 +54,7 @@ OutputDirectory::OutputDirectory(const std::filesystem::path& dir) {
 
 void OutputDirectory::keep() {
   keep_ = true;
+  if (unfinished_) unfinished_->release();
   unfinished_.reset();
 }
 
