@@ -448,10 +448,6 @@ void fillFullRuns(FloatGrid& grid, const std::vector<FullRun>& runs, int ax, int
     }
 }
 
-}  // namespace voxel
-
-namespace voxel {
-
 FloatGrid::Ptr dexelFractions(const DexelStock& d) {
   initVdb();
   const double h = d.resolution();

@@ -318,14 +318,13 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     // a pair of samples a round, until a wall has its change: the gap between a change and the
     // first reading grows with its rank on either side, by a sample on the other, so the
     // first rank that holds one holds the nearest.
-    // The j-th wall sample about the first reading `at`.
-    auto sampleAngle = [](double at, int j) {
-      return std::clamp(at - kReach + 2.0 * kReach * j / kWallSamples, 0.0, kPi);
-    };
+    // The j-th wall sample about the first reading `at` (unclamped, and as sampled).
+    auto unclamped = [](double at, int j) { return at - kReach + 2.0 * kReach * j / kWallSamples; };
+    auto sampleAngle = [&](double at, int j) { return std::clamp(unclamped(at, j), 0.0, kPi); };
     // Wall q's: the first reading's direction turned by the sample's angle from it, unless
     // clamped.
     auto sampleDirection = [&](std::size_t q, int j) -> Eigen::Vector2d {
-      const double phi = firstAt[q][2] - kReach + 2.0 * kReach * j / kWallSamples;
+      const double phi = unclamped(firstAt[q][2], j);
       if (phi < 0.0 || phi > kPi) return direction(std::clamp(phi, 0.0, kPi));
       const auto& [c, sn] = turn[static_cast<std::size_t>(j)];
       const double ca = firstAt[q][0], sa = firstAt[q][1];
@@ -357,7 +356,7 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
         auto& row = rows[q];
         for (std::size_t t = 0; t < newCount; ++t)
           row[static_cast<std::size_t>(newSamples[t])] = in[p * newCount + t];
-        const double at = 0.5 * (e.lo + e.hi);
+        const double at = firstAt[q][2];
         double best = kNaN, bestLo = 0.0, bestHi = 0.0;
         for (const int j : {kMiddle - 1 - rank, kMiddle + rank}) {
           const auto ju = static_cast<std::size_t>(j);

@@ -64,43 +64,27 @@ std::size_t writeStockFiles(const RunResult& result, const StockView& view,
     for (const std::exception_ptr& e : failed)
       if (e) std::rethrow_exception(e);
   };
-  // A dexel stock: its removal from its own record, its material as voxel fractions, for the
-  // same viewers (coarser than its rays straight from them, where the grid is large).
-  const auto* dexels = dynamic_cast<const DexelStock*>(result.stock.get());
-  if (dexels) run(0, [&] { VoxelStock::writeRemovedVdb(*dexels, (dir / "removed.vdb").string()); });
+  // Nothing without a stock. A dexel stock's removal from its own record; its material as
+  // voxel fractions (writeStockVdb), converted by whichever task asks first.
+  if (!result.stock) return 0;
+  if (const DexelStock* dexels = view.dexels())
+    run(0, [&, dexels] { VoxelStock::writeRemovedVdb(*dexels, (dir / "removed.vdb").string()); });
+  else
+    run(0, [&] { view.voxels()->writeRemovedVdb((dir / "removed.vdb").string()); });
+  run(1, [&] { writeStockVdb(view, dir); });
   std::size_t openEdges = 0;
-  auto stl = [&] {
+  run(2, [&] {
     const TriangleMesh mesh = view.surface(result.job.stlTriangles);
     writeStl(mesh, (dir / "stock.stl").string());
     openEdges = boundaryEdgeCount(mesh);
-  };
-  if (dexels && VoxelStock::dexelFileFactor(*dexels) > 1) {
-    run(1, [&] { VoxelStock::writeDexelStockVdb(*dexels, (dir / "stock.vdb").string()); });
-    run(2, stl);
-    if (alongside) run(3, alongside);
-    finish();
-    return openEdges;
-  }
-  const VoxelStock* shown = nullptr;
-  try {
-    shown = view.voxels();  // (a dexel stock converted while its removed.vdb is written)
-  } catch (...) {
-    finish();  // (removed.vdb's own failure, if it failed too, is the one thrown)
-    throw;
-  }
-  if (!shown) {
-    finish();
-    return 0;
-  }
-  if (!dexels) run(0, [&] { shown->writeRemovedVdb((dir / "removed.vdb").string()); });
-  run(1, [&] { shown->writeStockVdb((dir / "stock.vdb").string(), dexels); });
-  run(2, stl);
+  });
   if (alongside) run(3, alongside);
   finish();
   return openEdges;
 }
 
 void writeStockVdb(const StockView& view, const std::filesystem::path& dir) {
+  // A dexel stock's grid too large for its surface at the rays' cell: straight from the rays.
   if (const DexelStock* dexels = view.dexels(); dexels && VoxelStock::dexelFileFactor(*dexels) > 1)
     return VoxelStock::writeDexelStockVdb(*dexels, (dir / "stock.vdb").string());
   if (const VoxelStock* shown = view.voxels())

@@ -498,24 +498,37 @@ TEST_CASE("a cut continued from a stock.vdb removes what the same cut in one run
   std::filesystem::remove(path);
 }
 
+namespace {
+
+/// The stock.vdb tests' dexel stock: a box whose sides are not on the ray lattice (its last
+/// columns covered in part), 0.3 mm rays.
+constexpr double kRays = 0.3;
+DexelStock offLatticeBox() {
+  Box3 b;
+  b.min = {0.05, 0.1, -10.0};
+  b.max = {40.0, 20.02, 0.0};
+  return DexelStock::box(b, kRays);
+}
+
+/// A slot 2 mm deep and a ramp across it with a 6 mm flat end mill: the volume they remove.
+double slotAndRamp(Stock& s) {
+  const AptCutter c = AptCutter::flat(6.0, 18.0);
+  double v = s.remove(Sweep(c, line({-5.0, 10.0, -2.0}, {45.0, 10.0, -2.0}), kRays)).volume;
+  v += s.remove(Sweep(c, line({5.0, 3.0, 0.5}, {35.0, 17.0, -3.1}), kRays)).volume;
+  return v;
+}
+
+}  // namespace
+
 TEST_CASE("a dexel stock written to stock.vdb comes back ray for ray", "[stock][vdb]") {
   // A box whose sides are not on the ray lattice (its last columns covered in part), a slot
   // and a ramp cut in dexels of 0.3 mm, written as a dexel run writes stock.vdb: read back at
   // the same spacing, every ray, interval and column share is the same number, so the same
   // cuts again remove exactly nothing (through the voxels' fractions alone they removed 17.8
   // mm^3 again on the Fusion 360 pocket); at another spacing the fractions are read as before.
-  const double h = 0.3;
-  Box3 b;
-  b.min = {0.05, 0.1, -10.0};
-  b.max = {40.0, 20.02, 0.0};
-  DexelStock d = DexelStock::box(b, h);
-  const AptCutter c = AptCutter::flat(6.0, 18.0);
-  auto cuts = [&](Stock& s) {
-    double v = s.remove(Sweep(c, line({-5.0, 10.0, -2.0}, {45.0, 10.0, -2.0}), h)).volume;
-    v += s.remove(Sweep(c, line({5.0, 3.0, 0.5}, {35.0, 17.0, -3.1}), h)).volume;
-    return v;
-  };
-  REQUIRE(cuts(d) > 400.0);
+  const double h = kRays;
+  DexelStock d = offLatticeBox();
+  REQUIRE(slotAndRamp(d) > 400.0);
   const std::string path = tempVdb("dexel_rays.vdb");
   VoxelStock::fromDexels(d).writeStockVdb(path, &d);
   DexelStock back = VoxelStock::dexelsFromVdb(path, h);
@@ -538,7 +551,7 @@ TEST_CASE("a dexel stock written to stock.vdb comes back ray for ray", "[stock][
     }
   CHECK(intervals > static_cast<std::size_t>(d.raysX() * d.raysY()));  // the cuts split rays
   CHECK(back.volume() == d.volume());
-  CHECK(cuts(back) == 0.0);
+  CHECK(slotAndRamp(back) == 0.0);
   // Another spacing: the fractions, whose volume is the stock's to their float rounding.
   const DexelStock other = VoxelStock::dexelsFromVdb(path, 0.25);
   CHECK(other.volume() == Approx(d.volume()).epsilon(1e-4));
@@ -583,17 +596,8 @@ TEST_CASE(
   // A box off the lattice, a slot and a ramp cut (as above), at each factor: the rays come
   // back exactly, a voxel run from the file starts from the voxels fromDexels makes of them
   // (to the bit), and the coarse fractions keep the stock's volume (to 32-bit floats).
-  b.min = {0.05, 0.1, -10.0};
-  b.max = {40.0, 20.02, 0.0};
-  const double hc = 0.3;
-  DexelStock d = DexelStock::box(b, hc);
-  const AptCutter c = AptCutter::flat(6.0, 18.0);
-  auto cuts = [&](Stock& s) {
-    double v = s.remove(Sweep(c, line({-5.0, 10.0, -2.0}, {45.0, 10.0, -2.0}), hc)).volume;
-    v += s.remove(Sweep(c, line({5.0, 3.0, 0.5}, {35.0, 17.0, -3.1}), hc)).volume;
-    return v;
-  };
-  REQUIRE(cuts(d) > 400.0);
+  DexelStock d = offLatticeBox();
+  REQUIRE(slotAndRamp(d) > 400.0);
   const double voxels = VoxelStock::fromDexels(d).volume();
   for (const int factor : {2, 4, 8}) {
     double budget = 1e9;  // the largest band budget that asks for this factor
@@ -602,11 +606,11 @@ TEST_CASE(
     REQUIRE(VoxelStock::dexelFileFactor(d, budget) == factor);
     VoxelStock::writeDexelStockVdb(d, coarse, budget);
     CHECK(VoxelStock::fileVolume(coarse) == Approx(d.volume()).epsilon(1e-6));
-    DexelStock back = VoxelStock::dexelsFromVdb(coarse, hc);
+    DexelStock back = VoxelStock::dexelsFromVdb(coarse, kRays);
     CHECK(back.volume() == d.volume());
     CHECK(back.segments() == d.segments());
-    CHECK(cuts(back) == 0.0);
-    CHECK(VoxelStock::fromVdb(coarse, hc).volume() == voxels);
+    CHECK(slotAndRamp(back) == 0.0);
+    CHECK(VoxelStock::fromVdb(coarse, kRays).volume() == voxels);
     CHECK(VoxelStock::dexelsFromVdb(coarse, 0.25).volume() == Approx(d.volume()).epsilon(1e-4));
   }
   std::filesystem::remove(coarse);
