@@ -13,7 +13,9 @@
 /// conditionals, and M98/M99 subprograms (O<n> in the program or <n>.ngc beside it) as
 /// LinuxCNC 2.9 and Fanuc/Haas controls run them.
 ///
-/// Rotary and UVW words are read but stay out of the XYZ path (the move is marked otherAxes).
+/// Rotary and UVW words are read but stay out of the XYZ path (the move is marked otherAxes);
+/// the rotary axes' positions ride on each move (Move::rotaryStart, rotaryEnd), and a machine
+/// with kinematics refuses a rotary word of an axis it does not have.
 ///
 /// Probing G38.2-G38.5 runs to the target and backs off 0.254 mm, as LinuxCNC's stand-alone
 /// interpreter has it (#5061-#5063 = target, #5070 = 0); G33/G33.1 feed at K x S; G7 reads X
@@ -30,6 +32,7 @@
 
 #include "cutters/Error.h"
 #include "engine/gcode/Toolpath.h"
+#include "engine/kinematics/Kinematics.h"
 
 #include <cstddef>
 #include <functional>
@@ -61,6 +64,8 @@ struct MachineSetup {
   bool startInch = false;                ///< "startup_units": "in" (G20 at power-on)
   bool startUnitsGiven = false;          ///< the file says "startup_units"
   Eigen::Vector3d travelMin{0.0, 0.0, 0.0}, travelMax{0.0, 0.0, 0.0};
+  /// The kinematic chain ("kinematics"): which rotary axes turn the tool relative to the part.
+  Kinematics kinematics;
 };
 
 /// How to read a program.

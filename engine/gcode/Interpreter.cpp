@@ -85,6 +85,7 @@ Interpreter::Interpreter(const ReaderOptions& options) : options_(options) {
   pos_ = options.start;
   tool_ = preparedTool_ = options.startTool;
   startKnown_ = options.startKnown;
+  if (options.machine) out_.kinematics = options.machine->kinematics;
   if (const auto& m = options.machine) {
     // The interpreter runs in the machine's coordinates (mm at the start); run() moves the
     // result into G54's frame.
@@ -559,8 +560,8 @@ Interpreter::Words Interpreter::collect(const Block& b) {
     w.v[i] = word.value;
     w.col[i] = word.column;
   }
-  // Rotary and UVW words are read and kept out of the XYZ path; the move is marked so that
-  // a 3-axis simulation can refuse it with the line named.
+  // Rotary and UVW words are read and kept out of the XYZ path; the move is marked so that a
+  // simulation without the machine's kinematics can refuse it with the line named.
   for (const char axis : {'A', 'B', 'C', 'U', 'V', 'W'})
     if (w.has(axis)) w.otherAxes = true;
   return w;
@@ -728,6 +729,15 @@ bool Interpreter::executeBlock(const Block& b) {
     double& at = otherAxisPosition_[std::string_view("ABCUVW").find(axis)];
     const double to = incremental_ ? at + w.get(axis) : w.get(axis);
     if (to != at) otherAxes_ = true;
+    if (to != at && axis <= 'C' && options_.machine && options_.machine->kinematics.rotary() &&
+        options_.machine->kinematics.rotaryAxes().find(axis) == std::string::npos) {
+      std::string letters;
+      for (const char a : options_.machine->kinematics.rotaryAxes())
+        letters += std::string(letters.empty() ? "" : " and ") + a;
+      fail(w.column(axis), "expected the rotary axes of this machine only, " + letters + " (" +
+                               kinematicsTypeName(options_.machine->kinematics.type) + " in " +
+                               options_.machine->name + "), found " + axis);
+    }
     at = to;
   }
   if (g0 && motionWord && axes && (*g0 == G_10 || *g0 == G_28 || *g0 == G_30 || *g0 == G_92))
@@ -921,9 +931,14 @@ Move Interpreter::base(MoveKind kind) const {
   m.incremental = incremental_;
   m.absoluteArcCenters = !arcIncremental_;
   m.feedMode = feedMode_;
+  if (feedMode_ == FeedMode::InverseTime && kind != MoveKind::Rapid && feed_ > 0.0)
+    m.minutes = 1.0 / feed_;
   m.workOffset = workOffset();
   m.block = recordBlock();
   m.otherAxes = otherAxes_;
+  m.rotaryStart = out_.moves.empty() ? Eigen::Vector3d::Zero() : out_.moves.back().rotaryEnd;
+  m.rotaryEnd =
+      Eigen::Vector3d(otherAxisPosition_[0], otherAxisPosition_[1], otherAxisPosition_[2]);
   return m;
 }
 

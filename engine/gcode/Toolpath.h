@@ -7,6 +7,8 @@
 /// offsets (G54-G59.3, G92), as LinuxCNC's interpreter reports them: tool length offsets
 /// (G43) move the spindle, not the tip, and are not added.
 
+#include "engine/kinematics/Kinematics.h"
+
 #include <Eigen/Core>
 
 #include <cstdint>
@@ -64,6 +66,10 @@ struct Move {
   int line = 0;             ///< 1-based source line
   int block = 0;            ///< index into Toolpath::blocks: the executed line it came from
   bool otherAxes = false;   ///< its line also commands A, B, C, U, V or W (not in the path)
+  /// The rotary axes A, B, C at the move's start and end, degrees (the machine's kinematics
+  /// turn the tool relative to the part by them: engine/kinematics/Kinematics.h).
+  Eigen::Vector3d rotaryStart{0.0, 0.0, 0.0};
+  Eigen::Vector3d rotaryEnd{0.0, 0.0, 0.0};
   /// Spindle and Probe feeds are not the schedule's to change (see fixedFeed()).
   FeedSource feedSource = FeedSource::Word;
   /// Spindle-synchronised motion and probing: a feed schedule must leave the feed as it is.
@@ -74,6 +80,8 @@ struct Move {
   bool incremental = false;         ///< G91
   bool absoluteArcCenters = false;  ///< G90.1
   FeedMode feedMode = FeedMode::UnitsPerMinute;
+  /// Inverse time (G93): the move's duration, min (1 / F); 0 in the other modes.
+  double minutes = 0.0;
   /// Machine minus program coordinates (work offset + G92), mm.
   Eigen::Vector3d workOffset{0.0, 0.0, 0.0};
 };
@@ -126,6 +134,9 @@ struct Toolpath {
     int file = 0, line = 0;
   };
   std::vector<Place> unoffsetCompensation;
+  /// The machine's kinematic chain (its machine file's): how the moves' rotary axes turn the
+  /// tool relative to the part.
+  Kinematics kinematics;
 };
 
 /// Arcs: radius in the plane, mm.

@@ -16,16 +16,74 @@ Dialect dialectOf(const std::string& name) {
   throw ParameterError("--dialect: expected linuxcnc, fanuc, haas or grbl, found '" + name + "'");
 }
 
+namespace {
+
+/// The "kinematics" object of a machine file (Machine.h); `point` reads [x, y, z] in mm.
+template <typename Point>
+Kinematics readKinematics(const std::string& path, const nlohmann::json& k, Point&& point,
+                          double unit) {
+  if (!k.is_object() || !k.contains("type") || !k["type"].is_string())
+    throw Error(path + ": \"kinematics\" must be an object with a \"type\", found " + k.dump());
+  Kinematics out;
+  try {
+    out.type = kinematicsTypeOf(k["type"].get<std::string>());
+  } catch (const ParameterError& e) {
+    throw Error(path + ": \"kinematics.type\": " + e.what());
+  }
+  const bool table = out.type != Kinematics::Type::HeadBC && out.type != Kinematics::Type::Trivial;
+  const bool trunnion =
+      out.type == Kinematics::Type::TableAC || out.type == Kinematics::Type::TableBC;
+  const bool head =
+      out.type == Kinematics::Type::HeadBC || out.type == Kinematics::Type::HeadBTableC;
+  for (const auto& [key, value] : k.items()) {
+    const bool known = key == "type" || key == "tcp" || (key == "rot_point" && table) ||
+                       (key == "offset" && trunnion) || (key == "pivot_length" && head);
+    if (!known)
+      throw Error(path + ": \"kinematics\": unknown key \"" + key + "\" for type " +
+                  kinematicsTypeName(out.type) + " (expected type, tcp" +
+                  (table ? ", rot_point" : "") + (trunnion ? ", offset" : "") +
+                  (head ? ", pivot_length" : "") + ")");
+  }
+  if (k.contains("tcp")) {
+    if (!k["tcp"].is_boolean())
+      throw Error(path + ": \"kinematics.tcp\" must be true or false, found " + k["tcp"].dump());
+    out.tcp = k["tcp"].get<bool>();
+  }
+  if (k.contains("rot_point")) out.rotPoint = point(k["rot_point"], "kinematics.rot_point");
+  if (k.contains("offset")) {
+    out.offset = point(k["offset"], "kinematics.offset");
+    const int unused = out.type == Kinematics::Type::TableAC ? 0 : 1;  // x for A's, y for B's
+    if (out.offset[unused] != 0.0)
+      throw Error(path + ": \"kinematics.offset\" of a " + kinematicsTypeName(out.type) +
+                  " trunnion has no " + std::string(1, static_cast<char>('x' + unused)) +
+                  " (its tilt axis is offset from C's along " +
+                  (unused == 0 ? "y and z" : "x and z") + "), found " + k["offset"].dump());
+  }
+  if (head) {
+    if (!k.contains("pivot_length") || !k["pivot_length"].is_number() ||
+        !(k["pivot_length"].get<double>() > 0.0) || !std::isfinite(k["pivot_length"].get<double>()))
+      throw Error(path +
+                  ": \"kinematics.pivot_length\" must be a positive number (the head's "
+                  "pivot to the tool tip) for type " +
+                  kinematicsTypeName(out.type) + ", found " +
+                  (k.contains("pivot_length") ? k["pivot_length"].dump() : "none"));
+    out.pivotLength = k["pivot_length"].get<double>() * unit;
+  }
+  return out;
+}
+
+}  // namespace
+
 MachineSetup readMachine(const std::string& path) {
   using nlohmann::json;
   const json doc = readJsonFile(path);
   if (!doc.is_object()) throw Error(path + ": expected a JSON object (a machine description)");
   for (const auto& [key, value] : doc.items())
     if (key != "units" && key != "work_offset" && key != "g28" && key != "g30" && key != "start" &&
-        key != "travel" && key != "name" && key != "startup_units")
+        key != "travel" && key != "name" && key != "startup_units" && key != "kinematics")
       throw Error(path + ": unknown key \"" + key +
                   "\" (expected units, work_offset, g28, g30, start, travel, startup_units, "
-                  "name)");
+                  "kinematics, name)");
   double unit = 1.0;
   if (doc.contains("units")) {
     const json& u = doc["units"];
@@ -78,6 +136,8 @@ MachineSetup readMachine(const std::string& path) {
         throw Error(path + ": \"start\" lies outside the travel along " +
                     std::string(1, static_cast<char>('X' + a)));
   }
+  if (doc.contains("kinematics"))
+    m.kinematics = readKinematics(path, doc["kinematics"], point, unit);
   return m;
 }
 

@@ -12,8 +12,17 @@
 ///     "g30": [-300, 0, 0],
 ///     "start": [0, 0, 0],               // the tool tip when the program starts, or "g28",
 ///                                       // "g30" (default: 0, 0, 0, the machine's home)
-///     "travel": {"min": [-400, -300, -150], "max": [0, 0, 0]}   // optional
+///     "travel": {"min": [-400, -300, -150], "max": [0, 0, 0]},  // optional
+///     "kinematics": {"type": "table-ac",   // optional: the rotary axes' chain
+///                    "rot_point": [0, 0, -50], "offset": [0, 0, 12], "tcp": false}
 ///   }
+///
+/// "kinematics" (engine/kinematics/Kinematics.h): "type" one of table-a, table-b (a 4th axis),
+/// table-ac, table-bc (trunnions), head-bc, head-b-table-c; "rot_point" (table types) where the
+/// table's axes cross, in the program's work coordinates; "offset" (trunnions) the tilt axis's
+/// offset from C's; "pivot_length" (head types, required) from the head's pivot to the tool
+/// tip; "tcp" whether the controller holds the tip (X, Y, Z are the tip on the part). Without
+/// it, rotary motion is refused; with it, rotary words of axes the chain lacks are.
 ///
 /// Positions are machine coordinates. Every problem (unknown key, wrong shape, a start
 /// outside the travel) is an Error naming the file and the key.

@@ -386,6 +386,31 @@ TEST_CASE("rotary and UVW words stay out of the XYZ path, marked on the move", "
   CHECK_FALSE(still[3].otherAxes);
 }
 
+TEST_CASE("rotary positions ride on each move, and a machine refuses the axes it lacks",
+          "[gcode]") {
+  const auto m = moves("G0 X1 A90\nG1 X2 F100\nG91 G1 A-30 C15\nG90 G93 G1 X3 B10 F4\nM2\n");
+  REQUIRE(m.size() == 4);
+  checkPoint(m[0].rotaryStart, 0, 0, 0);
+  checkPoint(m[0].rotaryEnd, 90, 0, 0);
+  checkPoint(m[1].rotaryStart, 90, 0, 0);  // held
+  checkPoint(m[1].rotaryEnd, 90, 0, 0);
+  checkPoint(m[2].rotaryEnd, 60, 0, 15);  // incremental
+  checkPoint(m[3].rotaryEnd, 60, 10, 15);
+  CHECK(m[3].minutes == Approx(0.25));  // inverse time: 1 / F
+  CHECK(m[1].minutes == 0.0);
+  // On a table-A machine a B word that moves is an error at its column.
+  ReaderOptions o;
+  MachineSetup machine;
+  machine.name = "fourth.json";
+  machine.kinematics.type = Kinematics::Type::TableA;
+  o.machine = machine;
+  CHECK_THROWS_WITH(readProgramText("G0 X1 A90\nG0 X2 B5\nM2\n", "b.ngc", o),
+                    Catch::Matchers::Contains("b.ngc:2:7: expected the rotary axes of this machine "
+                                              "only, A (table-a in fourth.json), found B"));
+  CHECK(readProgramText("G0 X1 A90 B0\nM2\n", "b0.ngc", o).kinematics.type ==
+        Kinematics::Type::TableA);  // (a B word that stays put is no motion)
+}
+
 TEST_CASE("headers as Fanuc and Haas posts write them", "[gcode]") {
   // A program number after the '%', and G80 beside a motion code on one line.
   const Toolpath p = run("%\nO1001 (PART)\nG00 G17 G21 G40 G49 G80 G90\nX5 Y5\nG1 X10 F100\n%\n");

@@ -64,3 +64,41 @@ TEST_CASE("a machine description that cannot be right is refused, naming the key
              Contains("the key \"g28\" is given twice"));
   CHECK_THAT(errorOf("not json"), Contains("not valid JSON"));
 }
+
+TEST_CASE("a machine's kinematics: the chain, its points in the file's units, its refusals",
+          "[machine]") {
+  const test::TempFolder dir("machine_kinematics");
+  const MachineSetup m = readMachine(
+      dir.write("trunnion.json",
+                R"({"units": "in", "kinematics": {"type": "table-ac", "rot_point": [1, 2, -3],
+          "offset": [0, 0.5, 1], "tcp": true}})"));
+  CHECK(m.kinematics.type == Kinematics::Type::TableAC);
+  CHECK(m.kinematics.tcp);
+  // Inches to mm: 25.4 exactly.
+  CHECK((m.kinematics.rotPoint - Eigen::Vector3d(25.4, 50.8, -76.2)).norm() < 1e-12);
+  CHECK((m.kinematics.offset - Eigen::Vector3d(0.0, 12.7, 25.4)).norm() < 1e-12);
+  const MachineSetup head = readMachine(
+      dir.write("head.json", R"({"kinematics": {"type": "head-bc", "pivot_length": 150}})"));
+  CHECK(head.kinematics.pivotLength == 150.0);
+  CHECK_FALSE(head.kinematics.tcp);
+
+  CHECK_THAT(errorOf(R"({"kinematics": {"type": "xyzac"}})"),
+             Contains("\"kinematics.type\": expected a kinematics type"));
+  CHECK_THAT(errorOf(R"({"kinematics": "table-a"})"),
+             Contains("must be an object with a \"type\""));
+  CHECK_THAT(errorOf(R"({"kinematics": {"type": "head-bc"}})"),
+             Contains("\"kinematics.pivot_length\" must be a positive number"));
+  CHECK_THAT(errorOf(R"({"kinematics": {"type": "head-bc", "pivot_length": -5}})"),
+             Contains("\"kinematics.pivot_length\" must be a positive number"));
+  CHECK_THAT(errorOf(R"({"kinematics": {"type": "table-a", "pivot_length": 5}})"),
+             Contains("unknown key \"pivot_length\" for type table-a"));
+  CHECK_THAT(
+      errorOf(R"({"kinematics": {"type": "head-bc", "pivot_length": 5, "offset": [0, 0, 1]}})"),
+      Contains("unknown key \"offset\" for type head-bc"));
+  CHECK_THAT(errorOf(R"({"kinematics": {"type": "table-ac", "offset": [1, 0, 0]}})"),
+             Contains("a table-ac trunnion has no x"));
+  CHECK_THAT(errorOf(R"({"kinematics": {"type": "table-bc", "offset": [0, 2, 0]}})"),
+             Contains("a table-bc trunnion has no y"));
+  CHECK_THAT(errorOf(R"({"kinematics": {"type": "table-a", "tcp": "yes"}})"),
+             Contains("\"kinematics.tcp\" must be true or false"));
+}
