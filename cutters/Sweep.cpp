@@ -112,7 +112,62 @@ Eigen::Vector3d onArc(const StepPath& s, double r, double a0, double u) {
           s.start.z() + u * (s.end.z() - s.start.z())};
 }
 
+/// The distance from q (relative to the tip) to `cutter` standing on `axis` (unit), mm.
+double alongAxis(const AptCutter& cutter, const Eigen::Vector3d& q, const Eigen::Vector3d& axis) {
+  const double z = q.dot(axis);
+  return cutter.profileSignedDistance((q - z * axis).norm(), z);
+}
+
+/// `path` seen in the frame `toWorld` takes to the world (its axis there +Z): a line stays a
+/// line; an arc becomes a polyline whose chords stray at most a thousandth of `resolution`
+/// from it.
+StepPath inToolFrame(const StepPath& path, const Eigen::Matrix3d& toWorld, double resolution) {
+  const Eigen::Matrix3d toTool = toWorld.transpose();
+  StepPath local;
+  local.kind = path.kind == StepPath::Kind::Line ? StepPath::Kind::Line : StepPath::Kind::Polyline;
+  local.start = toTool * path.start;
+  local.end = toTool * path.end;
+  if (path.kind == StepPath::Kind::ArcXY) {
+    const double r = std::hypot(path.start.x() - path.center.x(), path.start.y() - path.center.y());
+    // A chord of angle phi strays r (1 - cos(phi / 2)) ~ r phi^2 / 8 from its arc.
+    const double phi = std::sqrt(8.0 * 1e-3 * resolution / std::max(r, 1e-9));
+    const int n = std::max(1, static_cast<int>(std::ceil(std::abs(path.sweepRad) / phi)));
+    for (int i = 0; i <= n; ++i)
+      local.points.push_back(toTool * path.at(static_cast<double>(i) / n));
+  } else {
+    for (const Eigen::Vector3d& q : path.points)
+      local.points.push_back(toTool * q);
+  }
+  return local;
+}
+
+/// Grows `box` to hold a cutter of radius `radius` and height `height` standing at `tip` on
+/// the unit `axis` (its cylinder's box), mm.
+void holdCylinder(Box3& box, const Eigen::Vector3d& tip, const Eigen::Vector3d& axis, double radius,
+                  double height) {
+  const Eigen::Vector3d top = tip + height * axis;
+  for (int i = 0; i < 3; ++i) {
+    const double across = radius * std::sqrt(std::max(0.0, 1.0 - axis[i] * axis[i]));
+    box.min[i] = std::min(box.min[i], std::min(tip[i], top[i]) - across);
+    box.max[i] = std::max(box.max[i], std::max(tip[i], top[i]) + across);
+  }
+}
+
 }  // namespace
+
+bool StepPath::tilted() const {
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  return (axisStart - z).squaredNorm() > 1e-24 || (axisEnd - z).squaredNorm() > 1e-24;
+}
+
+Eigen::Vector3d StepPath::axisAt(double u) const {
+  u = std::clamp(u, 0.0, 1.0);
+  const double angle = std::acos(std::clamp(axisStart.dot(axisEnd), -1.0, 1.0));
+  if (angle < 1e-12) return axisStart;
+  const double sinAngle = std::sin(angle);
+  return ((std::sin((1.0 - u) * angle) * axisStart + std::sin(u * angle) * axisEnd) / sinAngle)
+      .normalized();
+}
 
 Eigen::Vector3d StepPath::at(double u) const {
   u = std::clamp(u, 0.0, 1.0);
@@ -151,10 +206,23 @@ Eigen::Vector2d StepPath::feedDirectionAtEnd() const {
 }
 
 Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, double ceiling)
-    : cutter_(cutter), path_(path) {
+    : cutter_(cutter), path_(path), world_(path) {
   if (!(resolution > 0.0)) throw ParameterError("sweep resolution must be positive");
   if (path_.kind == StepPath::Kind::Polyline && path_.points.size() < 2)
     throw ParameterError("a polyline step needs at least two points");
+  if (!(std::abs(path.axisStart.norm() - 1.0) < 1e-9 && std::abs(path.axisEnd.norm() - 1.0) < 1e-9))
+    throw ParameterError("a step's tool axis must be a unit vector");
+  if (path.tilted()) {
+    ceiling = std::numeric_limits<double>::infinity();  // (a height says little of a tilted tool)
+    if ((path.axisStart - path.axisEnd).norm() <= 1e-12) {
+      rotated_ = true;
+      toWorld_ = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), path.axisStart)
+                     .toRotationMatrix();
+      path_ = inToolFrame(path, toWorld_, resolution);
+    } else {
+      turning_ = true;
+    }
+  }
   // Tip positions that bound the path: ends, polyline points, and the arc's axis extremes.
   std::vector<Eigen::Vector3d> extremes{path_.start, path_.end};
   double length = (path_.end - path_.start).norm();
@@ -179,13 +247,13 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
     }
     flatHeight = false;  // polylines always sample (arcs in other planes, splines)
   }
-  flat_ = flatHeight;
+  flat_ = flatHeight && !turning_;
   const auto& corners = cutter_.corners();
   lowerCorner_ = std::any_of(corners.begin(), corners.end(), [&](const ProfileCorner& c) {
     return c.at.y() < 0.5 * cutter_.height();
   });
   band_ = resolution;  // beyond one voxel from the surface only the sign matters
-  vertical_ = path_.kind == StepPath::Kind::Line &&
+  vertical_ = !turning_ && path_.kind == StepPath::Kind::Line &&
               (path_.end.head<2>() - path_.start.head<2>()).norm() <= tol::kLengthMm;
   resolution_ = resolution;
   zLow_ = std::min(path_.start.z(), path_.end.z());
@@ -195,8 +263,8 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
     zHigh_ = std::max(zHigh_, q.z() + cutter_.height());
   }
   // APT cutters are convex unless their sides lean inward (beta < 0).
-  convexLine_ =
-      !flat_ && path_.kind == StepPath::Kind::Line && cutter_.parameters().taperAngleRad >= 0.0;
+  convexLine_ = !flat_ && !turning_ && path_.kind == StepPath::Kind::Line &&
+                cutter_.parameters().taperAngleRad >= 0.0;
   // A ball end mill is a capsule about its axis (ball centre up to h - r above it) but for
   // its flat top; along a straight step it sweeps a parallelogram thickened by r.
   const AptParameters& ap = cutter_.parameters();
@@ -223,6 +291,10 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
   bounds_.min = lo - Eigen::Vector3d(w, w, 0.0);
   bounds_.max = hi + Eigen::Vector3d(w, w, cutter_.height());
   bounds_.max.z() = std::max(bounds_.min.z(), std::min(bounds_.max.z(), ceiling));
+  // A turning tool's points move by the tip's travel plus their reach times the turn.
+  const double reachAll = std::hypot(cutter_.maxRadius(), cutter_.height());
+  const double turn = std::acos(std::clamp(path.axisStart.dot(path.axisEnd), -1.0, 1.0));
+  if (turning_) length += reachAll * turn;
   if (!flat_ && !convexLine_) {
     const double spacing = resolution / 2.0;
     const int n = std::max(2, static_cast<int>(std::ceil(length / spacing)) + 1);
@@ -230,12 +302,56 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
     for (int i = 0; i < n; ++i)
       samples_[static_cast<std::size_t>(i)] = static_cast<double>(i) / (n - 1);
     sampleTips_.reserve(samples_.size());
-    for (const double u : samples_)
+    for (const double u : samples_) {
       sampleTips_.push_back(tip(u));
+      if (turning_) sampleAxes_.push_back(path_.axisAt(u));
+    }
+  }
+  if (rotated_) {
+    // The tool's-frame box is loose once turned: the cylinders at the world path's extremes.
+    Box3 box{Eigen::Vector3d::Constant(1e300), Eigen::Vector3d::Constant(-1e300)};
+    std::vector<Eigen::Vector3d> ends{world_.start, world_.end};
+    if (world_.kind == StepPath::Kind::ArcXY) {
+      const double r =
+          std::hypot(world_.start.x() - world_.center.x(), world_.start.y() - world_.center.y());
+      const double a0 =
+          std::atan2(world_.start.y() - world_.center.y(), world_.start.x() - world_.center.x());
+      for (int k = 0; k < 4; ++k)
+        if (withinSweep(k * kPi / 2.0, a0, world_.sweepRad))
+          ends.emplace_back(world_.center.x() + r * std::cos(k * kPi / 2.0),
+                            world_.center.y() + r * std::sin(k * kPi / 2.0), world_.start.z());
+      // (a helix's height between its ends: its extremes are at the ends)
+    }
+    ends.insert(ends.end(), world_.points.begin(), world_.points.end());
+    for (const Eigen::Vector3d& e : ends)
+      holdCylinder(box, e, world_.axisStart, cutter_.maxRadius(), cutter_.height());
+    bounds_ = box;
+  } else if (turning_) {
+    // Every instance's cylinder at the samples, grown by how far any point of the cutter
+    // moves between two of them.
+    Box3 box{Eigen::Vector3d::Constant(1e300), Eigen::Vector3d::Constant(-1e300)};
+    for (std::size_t i = 0; i < samples_.size(); ++i)
+      holdCylinder(box, sampleTips_[i], sampleAxes_[i], cutter_.maxRadius(), cutter_.height());
+    const double gap = length / static_cast<double>(samples_.size() - 1);
+    gap_ = gap;
+    box.min -= Eigen::Vector3d::Constant(gap);
+    box.max += Eigen::Vector3d::Constant(gap);
+    bounds_ = box;
+    const double half = 0.5 * cutter_.height();
+    middle0_ = tip(0.0) + half * path_.axisAt(0.0);
+    middle1_ = tip(1.0) + half * path_.axisAt(1.0);
+    reach_ = std::hypot(cutter_.maxRadius(), half);
+    for (std::size_t i = 0; i < samples_.size(); ++i) {
+      const Eigen::Vector3d m = sampleTips_[i] + half * sampleAxes_[i];
+      middleSpread_ = std::max(middleSpread_, (closestOnSegment(m, middle0_, middle1_) - m).norm());
+    }
+    middleSpread_ += gap;
   }
 }
 
-double Sweep::support(const Eigen::Vector3d& n) const {
+double Sweep::support(const Eigen::Vector3d& direction) const {
+  const Eigen::Vector3d n =
+      rotated_ ? Eigen::Vector3d(toWorld_.transpose() * direction) : direction;
   // The cutter's support is the profile's largest s rho + n_z z, s = |n_xy| (the profile
   // turned to face n): at a segment's ends, or inside an arc where its normal is (s, n_z).
   const Eigen::Vector2d w(n.head<2>().norm(), n.z());
@@ -259,12 +375,66 @@ double Sweep::support(const Eigen::Vector3d& n) const {
 
 double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
                              Eigen::Matrix3d* curvature) const {
-  return distance(p, gradient, curvature, nullptr);
+  if (!rotated_) return distance(p, gradient, curvature, nullptr);
+  const double d = distance(toWorld_.transpose() * p, gradient, curvature, nullptr);
+  if (gradient) *gradient = toWorld_ * *gradient;
+  if (curvature) *curvature = toWorld_ * *curvature * toWorld_.transpose();
+  return d;
+}
+
+double Sweep::instance(const Eigen::Vector3d& p, double u) const {
+  if (!turning_) return cutter_.signedDistance(p - tip(u));
+  return alongAxis(cutter_, p - tip(u), path_.axisAt(u));
+}
+
+double Sweep::turningDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
+                              Eigen::Matrix3d* curvature, double* closest) const {
+  // As the search below for steps that change height, each instance on its own axis.
+  const double atEnd = instance(p, 1.0);
+  if (atEnd < -band_) return atEnd;
+  const double bound =
+      (closestOnSegment(p, middle0_, middle1_) - p).norm() - middleSpread_ - reach_;
+  if (bound > band_) return bound;
+  // The samples alone: no point of the cutter moves further than `gap` between two of them,
+  // so beyond the band by more than that their minimum has the swept distance's sign.
+  double best = 1.0, nearest = 0.0;
+  for (std::size_t i = 0; i < samples_.size(); ++i) {
+    const double v = alongAxis(cutter_, p - sampleTips_[i], sampleAxes_[i]);
+    if (i == 0 || v < nearest) {
+      nearest = v;
+      best = samples_[i];
+    }
+  }
+  if (std::abs(nearest) > band_ + gap_) return nearest > 0.0 ? nearest - gap_ : nearest;
+  const double d = sampled(p, best);
+  if (closest) *closest = best;
+  const double e = resolution_ / 8.0;
+  auto f = [&](const Eigen::Vector3d& x) { return instance(x, best); };
+  if (gradient)
+    *gradient = Eigen::Vector3d(f(p + Eigen::Vector3d(e, 0, 0)) - f(p - Eigen::Vector3d(e, 0, 0)),
+                                f(p + Eigen::Vector3d(0, e, 0)) - f(p - Eigen::Vector3d(0, e, 0)),
+                                f(p + Eigen::Vector3d(0, 0, e)) - f(p - Eigen::Vector3d(0, 0, e))) /
+                (2.0 * e);
+  if (gradient && curvature && std::abs(d) < 0.5 * gradient->lpNorm<1>() * resolution_) {
+    // The swept distance's own second differences: whether the surface there is an envelope
+    // (a ball carried along) or one instance's (a ball turned about its centre) depends on how
+    // the motion moves the surface within itself.
+    const Eigen::Vector3d n = gradient->normalized();
+    *curvature = tangentCurvature(
+        [&](const Eigen::Vector3d& x) {
+          double unused = 0.0;
+          return sampled(x, unused);
+        },
+        Eigen::Vector3d(p - d * n), n, resolution_ / 4.0);
+  }
+  return d;
 }
 
 double Sweep::distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
                        Eigen::Matrix3d* curvature, double* closest) const {
   if (closest) *closest = std::numeric_limits<double>::quiet_NaN();
+  if (curvature) curvature->setZero();
+  if (turning_) return turningDistance(p, gradient, curvature, closest);
   const double e = resolution_ / 8.0;
   const double ek = resolution_ / 4.0;  // spacing of the curvature's second differences
   if (curvature) curvature->setZero();
@@ -379,6 +549,15 @@ double Sweep::distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
 }
 
 Eigen::Vector3d Sweep::tip(double u) const {
+  if (turning_ && path_.kind == StepPath::Kind::Polyline) {
+    // The points at even steps of the parameter the axis turns by (the kinematics' poses at
+    // even shares of the move's time), not of the length.
+    const std::size_t pieces = path_.points.size() - 1;
+    const double at = std::clamp(u, 0.0, 1.0) * static_cast<double>(pieces);
+    const std::size_t i = std::min(pieces - 1, static_cast<std::size_t>(at));
+    return path_.points[i] +
+           (at - static_cast<double>(i)) * (path_.points[i + 1] - path_.points[i]);
+  }
   if (path_.kind != StepPath::Kind::ArcXY) return path_.at(u);
   // StepPath::at with the arc's radius and start angle kept (their hypot and atan2 were
   // half of a helix step's instructions); the same arithmetic, the same values.
@@ -447,6 +626,17 @@ Eigen::Matrix3d Sweep::alongPathCurvature(const Eigen::Vector3d& foot, double ti
 
 double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3d normals[2],
                          double distances[2], int& count, Eigen::Matrix3d* curvature) const {
+  if (!rotated_) return facesInFrame(p, radius, normals, distances, count, curvature);
+  const double d =
+      facesInFrame(toWorld_.transpose() * p, radius, normals, distances, count, curvature);
+  for (int i = 0; i < std::max(count, 1); ++i)
+    normals[i] = toWorld_ * normals[i];
+  if (curvature) *curvature = toWorld_ * *curvature * toWorld_.transpose();
+  return d;
+}
+
+double Sweep::facesInFrame(const Eigen::Vector3d& p, double radius, Eigen::Vector3d normals[2],
+                           double distances[2], int& count, Eigen::Matrix3d* curvature) const {
   if (curvature) curvature->setZero();
   if (flat_ || vertical_) {
     // A height-keeping step sweeps the profile along its path; a plunge or retract sweeps it
@@ -487,7 +677,9 @@ double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3
     // an edge that one plane cannot follow; say so (count 0) and let the caller sample.
     if (std::isnan(best)) sampled(p, best);  // (the distance was a bound)
     const Eigen::Vector3d q = p - tip(best);
-    const Eigen::Vector2d at(q.head<2>().norm(), q.z());
+    const Eigen::Vector3d axis = turning_ ? path_.axisAt(best) : Eigen::Vector3d::UnitZ();
+    const double along = q.dot(axis);
+    const Eigen::Vector2d at((q - along * axis).norm(), along);
     for (const ProfileCorner& c : cutter_.corners())
       if (c.at.y() < 0.5 * cutter_.height() && (at - c.at).norm() < radius) count = 0;
     if (count == 0 && curvature) curvature->setZero();
@@ -496,7 +688,7 @@ double Sweep::localFaces(const Eigen::Vector3d& p, double radius, Eigen::Vector3
 }
 
 double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter) const {
-  auto f = [&](double u) { return cutter_.signedDistance(p - tip(u)); };
+  auto f = [&](double u) { return instance(p, u); };
   // The best of the candidates (value, parameter) seen so far.
   double bestValue = 0.0;
   bool any = false;
@@ -543,7 +735,8 @@ double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter) const {
   }
   std::size_t best = 0;
   for (std::size_t i = 0; i < samples_.size(); ++i) {
-    const double v = cutter_.signedDistance(p - sampleTips_[i]);
+    const double v = turning_ ? alongAxis(cutter_, p - sampleTips_[i], sampleAxes_[i])
+                              : cutter_.signedDistance(p - sampleTips_[i]);
     if (!any || v < bestValue) best = i;
     consider(samples_[i], v);
   }

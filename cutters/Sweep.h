@@ -1,7 +1,7 @@
 #pragma once
 /// \file Sweep.h
-/// The solid swept by a cutter over one step of a tool path (tool axis +Z throughout, the
-/// tip following the step): its signed distance and bounds.
+/// The solid swept by a cutter over one step of a tool path (the tip following the step, the
+/// tool's axis +Z or, on a 4- or 5-axis machine, tilted): its signed distance and bounds.
 ///
 /// Exact where the geometry allows a closed form: a step that keeps its height (a horizontal
 /// line or an XY arc) sweeps the profile along the step's XY path, and since every horizontal
@@ -12,6 +12,12 @@
 /// arcs in the XZ/YZ planes, inward-leaning sides) sampled every half `resolution` and
 /// refined around the best sample. This is exact outside the solid; inside it is the depth
 /// below the nearest instance, a little shallower than the swept surface's.
+///
+/// A tilted tool whose axis stays put over the step (3+2 indexed machining, a 4th axis held)
+/// is the same solid turned: everything above holds in the tool's frame, the step's path
+/// turned into it (an arc there is a polyline within a thousandth of `resolution`). A tool
+/// whose axis turns over the step (simultaneous 4- and 5-axis motion) is sampled as above,
+/// each instance at its own axis, with the same refinement.
 
 #include "cutters/AptCutter.h"
 
@@ -33,9 +39,19 @@ struct StepPath {
   Eigen::Vector3d center{0.0, 0.0, 0.0};
   double sweepRad = 0.0;
   /// Polyline: tip positions from start to end (start and end included), for arcs in other
-  /// planes and splines.
+  /// planes and splines; where the axis turns over the step, at even steps of its parameter
+  /// (the tool's pose at even shares of the step's time).
   std::vector<Eigen::Vector3d> points;
+  /// The tool's axis (unit, from the tip toward the spindle) at the step's start and end; +Z
+  /// for a 3-axis machine. Between them it turns at a steady rate (spherical interpolation
+  /// over the step's parameter).
+  Eigen::Vector3d axisStart{0.0, 0.0, 1.0};
+  Eigen::Vector3d axisEnd{0.0, 0.0, 1.0};
 
+  /// Whether the tool's axis is anything but +Z on the step.
+  bool tilted() const;
+  /// The tool's axis at parameter u in [0, 1].
+  Eigen::Vector3d axisAt(double u) const;
   /// Tip position at parameter u in [0, 1] (arc length fraction for lines and arcs).
   Eigen::Vector3d at(double u) const;
   /// Unit direction of travel in XY at the step's end (the arc's tangent for arcs); +X for
@@ -56,7 +72,8 @@ class Sweep {
   /// `resolution` (mm, e.g. the voxel size) sets the sampling of steps that change height.
   /// `ceiling` (mm): no material lies above this height (the stock's top), so bounds() need
   /// only hold the part of the swept solid below it: a V-bit engraving 0.07 mm deep is asked
-  /// about the 0.08 mm it engages, not its whole diameter.
+  /// about the 0.08 mm it engages, not its whole diameter (a tilted tool's bounds hold all of
+  /// it).
   Sweep(const AptCutter& cutter, const StepPath& path, double resolution,
         double ceiling = std::numeric_limits<double>::infinity());
 
@@ -91,7 +108,7 @@ class Sweep {
                     double distances[2], int& count, Eigen::Matrix3d* curvature = nullptr) const;
   /// World bounding box of the swept solid below the ceiling, mm.
   Box3 bounds() const { return bounds_; }
-  const StepPath& path() const { return path_; }
+  const StepPath& path() const { return world_; }
   /// Whether the swept solid is convex: a straight step of a convex cutter (its sides do not
   /// lean inward) that changes height (a height-keeping step's solid is convex too, but is
   /// answered in closed form).
@@ -103,6 +120,15 @@ class Sweep {
   const AptCutter& cutter() const { return cutter_; }
 
  private:
+  /// localFaces in the frame the step is computed in (the tool's, where it is tilted).
+  double facesInFrame(const Eigen::Vector3d& p, double radius, Eigen::Vector3d normals[2],
+                      double distances[2], int& count, Eigen::Matrix3d* curvature) const;
+  /// The signed distance from p to the cutter at parameter u of the step (its own axis where
+  /// the axis turns), mm.
+  double instance(const Eigen::Vector3d& p, double u) const;
+  /// distance() for a step whose axis turns.
+  double turningDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
+                         Eigen::Matrix3d* curvature, double* closest) const;
   /// signedDistance, and where it searched along the step (not a closed form or a bound) the
   /// parameter of the closest tool position in `closest` (NaN otherwise).
   double distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* curvature,
@@ -124,8 +150,18 @@ class Sweep {
   Eigen::Vector3d tip(double u) const;
 
   AptCutter cutter_;
-  StepPath path_;
-  bool flat_ = false;            ///< the step keeps its height: closed form
+  StepPath path_;         ///< in the frame the step is computed in (the tool's where it is tilted)
+  StepPath world_;        ///< as given
+  bool rotated_ = false;  ///< a tilted axis that stays put: path_ in the tool's frame
+  Eigen::Matrix3d toWorld_ = Eigen::Matrix3d::Identity();  ///< rotated_: tool frame to world
+  bool turning_ = false;  ///< the axis turns over the step: instances sampled, world frame
+  std::vector<Eigen::Vector3d> sampleAxes_;  ///< turning_: the axis at samples_[i]
+  /// turning_: the cutter's middle (tip + height/2 along the axis) at the step's ends, and
+  /// how far from the segment between them the middle strays and the cutter reaches (mm).
+  Eigen::Vector3d middle0_{0.0, 0.0, 0.0}, middle1_{0.0, 0.0, 0.0};
+  double middleSpread_ = 0.0, reach_ = 0.0;
+  double gap_ = 0.0;   ///< turning_: how far any point of the cutter moves between samples, mm
+  bool flat_ = false;  ///< the step keeps its height: closed form
   bool convexLine_ = false;      ///< a straight step of a convex cutter: golden-section search
   bool capsuleLine_ = false;     ///< a straight step of a ball end mill: closed form
   Parallelogram capsule_;        ///< capsuleLine_: the ball centre's path, up to h - r

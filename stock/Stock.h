@@ -96,6 +96,8 @@ class Stock {
   /// removeSteps call (else only as it is now: a caller that reads the stock after each step
   /// then removes them one at a time).
   virtual bool readsWithinBatch() const { return false; }
+  /// Whether remove() takes a tilted tool's sweep (StepPath::tilted: a 4- or 5-axis step).
+  virtual bool followsTiltedTools() const { return false; }
   /// How far from a point (in cells) a second surface may change a MaterialReader's reading of
   /// the first: beyond it, a wall is read exactly whatever else was cut nearby.
   virtual double readingReach() const = 0;

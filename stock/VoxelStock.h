@@ -95,6 +95,7 @@ class VoxelStock : public Stock {
   /// Voxel size h, mm.
   double voxelSize() const;
   double resolution() const override { return voxelSize(); }
+  bool followsTiltedTools() const override { return true; }
   /// Material volume: sum of fractions times h^3, mm^3.
   double volume() const override;
   /// Material fraction of the voxel centred at (i, j, k) h.

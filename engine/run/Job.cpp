@@ -748,7 +748,17 @@ void stockOptions(Job& job, const OptionValues& values,
         "--material needs a --stock: the forces come from the measured engagement");
   if (!(job.crossTolerance > 0.0 && job.crossTolerance < 1.0))
     throw ParameterError("--cross-check-tolerance: expected a fraction in (0, 1)");
-  job.stockModel = text("stock-model") == "dexel" ? StockModel::Dexel : StockModel::Voxel;
+  // A program that tilts the tool (a 4- or 5-axis machine's kinematics) runs in the voxel
+  // stock unless told otherwise: the dexel stock's rays are vertical (the simulation refuses
+  // a tilted tool in it, naming the line).
+  const std::string model = text("stock-model");
+  job.stockModel = model == "voxel" || (model.empty() && tiltsTool(job.path)) ? StockModel::Voxel
+                                                                              : StockModel::Dexel;
+  if (job.crossCheck && tiltsTool(job.path))
+    throw ParameterError(
+        "--cross-check needs the dexel stock too, whose vertical rays cannot "
+        "follow this program's tilted tool (" +
+        std::string(kinematicsTypeName(job.path.kinematics.type)) + " kinematics)");
   if (!stock.empty()) job.stock = parseStock(stock, sys);
   partOptions(job, values, sys);
 }
@@ -841,6 +851,11 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
     so.stepover = parseQuantity(text("stepover"), Dimension::Length, sys, "--stepover").value;
   if (!text("depth").empty())
     so.depth = parseQuantity(text("depth"), Dimension::Length, sys, "--depth").value;
+  if (job.scheduling() && std::any_of(job.path.moves.begin(), job.path.moves.end(),
+                                      [](const Move& m) { return turnsRotary(m); }))
+    throw ParameterError(
+        "re-feeding a program that turns rotary axes is not built yet (its "
+        "feeds would be re-written as inverse time): simulate it");
   if (job.scheduling()) job.schedule = scheduleOptions(values, sys, job);
   so.physics = physicsOptions(values, sys);
   stockOptions(job, values, project, sys);

@@ -93,8 +93,9 @@ std::vector<OptionInfo> makeTable() {
                "with --part: a leftover counts where material is left thicker than this on "
                "the part (default 0.05mm; 0.002in for an inch program; a roughing program's "
                "stock to leave)"),
-      choice("stock-model", G::Stock, {"voxel", "dexel"}, "dexel",
-             "dexel (vertical rays, the default) or voxel (volume fractions)"),
+      choice("stock-model", G::Stock, {"voxel", "dexel"}, "",
+             "dexel (vertical rays; the default) or voxel (volume fractions; the default for a "
+             "program that tilts the tool, through a --machine file's kinematics)"),
       quantity("voxel", G::Simulation, D::Length,
                "dexel ray spacing or voxel size (default: a twentieth of the diameter the "
                "tools engage at the program's depths)"),

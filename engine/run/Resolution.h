@@ -59,7 +59,8 @@ ProgramEngagement programEngagement(const Toolpath& path, const CutterSet& cutte
 /// Boxes (mm) that hold everything the program's tools sweep below the top of `stock`, clipped
 /// to it: each move in pieces no longer than the tool is wide there (arcs in pieces of at most
 /// 10 deg), each piece's box widened by the tool's radius at the piece's depth and reaching up
-/// to the stock's top. A sparse stock holds leaves only there (VoxelStock::memoryBound).
+/// to the stock's top. A sparse stock holds leaves only there (VoxelStock::memoryBound). On a
+/// machine with rotary kinematics, the whole stock.
 std::vector<Box3> programReach(const Toolpath& path, const CutterSet& cutters, const Box3& stock);
 
 /// The stock models a job holds at once (its own, and the other one with --cross-check).

@@ -39,23 +39,6 @@ bool stopRequested() noexcept {
   return stopFlag.load(std::memory_order_relaxed);
 }
 
-StepPath stepPath(const Move& m, double t0, double t1) {
-  StepPath p;
-  p.start = pointAt(m, t0);
-  p.end = pointAt(m, t1);
-  if (m.kind == MoveKind::Arc && m.plane == Plane::XY) {
-    p.kind = StepPath::Kind::ArcXY;
-    p.center = m.center;
-    p.sweepRad = arcSweep(m) * (t1 - t0);
-  } else if (m.kind == MoveKind::Arc || m.kind == MoveKind::Spline) {
-    p.kind = StepPath::Kind::Polyline;
-    constexpr int kPieces = 8;
-    for (int i = 0; i <= kPieces; ++i)
-      p.points.push_back(pointAt(m, t0 + (t1 - t0) * i / kPieces));
-  }
-  return p;
-}
-
 namespace {
 
 /// Signed curvature of the tool-centre path in XY, 1/mm (+ counter-clockwise).
@@ -79,12 +62,23 @@ struct Planned {
   double length;  ///< of the step, mm (a spline's length is a walk over its points: once)
 };
 
-/// Every move in pieces no longer than L (arcs as arc pieces, never longer than the move).
-std::vector<Planned> planSteps(const Toolpath& path, double L, std::size_t maxSteps) {
+/// The longest reach of a cutter from its tip (the hypotenuse of its radius and height), mm.
+double reachOf(const AptCutter& cutter) {
+  return std::hypot(cutter.maxRadius(), cutter.height());
+}
+
+/// Every move in pieces no longer than L (arcs as arc pieces, never longer than the move); on
+/// a machine with rotary kinematics, no point of the cutter travels further than L in the
+/// part's frame over a step.
+std::vector<Planned> planSteps(const Toolpath& path, const CutterSet& cutters, double L,
+                               std::size_t maxSteps) {
   checkStepCount(path, L, maxSteps);
   std::vector<Planned> plan;
   for (std::size_t i = 0; i < path.moves.size(); ++i) {
-    const double len = moveLength(path.moves[i]);
+    const Move& m = path.moves[i];
+    const double len = path.kinematics.rotary()
+                           ? moveTravel(m, path.kinematics, reachOf(cutters.of(m.tool)))
+                           : moveLength(m);
     if (len <= 0.0) continue;
     const int n = std::max(1, static_cast<int>(std::ceil(len / L - 1e-9)));
     for (int k = 0; k < n; ++k)
@@ -109,15 +103,50 @@ StepRecord plannedRecord(const Planned& p, const Move& m, const StepPath& sp, do
   r.end = sp.end;
   r.feed = m.kind == MoveKind::Rapid ? 0.0 : m.feed;
   r.dt = r.feed > 0.0 ? r.length / r.feed * 60.0 : 0.0;
+  if (turnsRotary(m)) {
+    // The rotary axes turn: the time is the move's share of its duration, the length the
+    // tip's travel on the part, the feed the tip's speed there.
+    double tipTravel = (sp.end - sp.start).norm();
+    if (!sp.points.empty()) {
+      tipTravel = 0.0;
+      for (std::size_t i = 1; i < sp.points.size(); ++i)
+        tipTravel += (sp.points[i] - sp.points[i - 1]).norm();
+    }
+    arc += tipTravel - r.length;
+    r.length = tipTravel;
+    r.arcLength = arc;
+    r.dt = (p.t1 - p.t0) * rotaryMoveMinutes(m) * 60.0;
+    r.feed = r.dt > 0.0 ? r.length / (r.dt / 60.0) : 0.0;
+  }
   return r;
 }
 
+/// Rotary motion without the machine's kinematics, and U, V, W motion, refused with the line.
 void refuseOtherAxes(const Toolpath& path) {
+  for (const Move& m : path.moves) {
+    if (!m.otherAxes || (turnsRotary(m) && path.kinematics.rotary())) continue;
+    const std::string where =
+        path.files[static_cast<std::size_t>(m.file)] + ":" + std::to_string(m.line) + ": ";
+    if (turnsRotary(m))
+      throw ParameterError(where +
+                           "this line moves a rotary axis: give the machine's kinematics (a "
+                           "--machine file with \"kinematics\") to simulate it");
+    throw ParameterError(where +
+                         "this line moves a U, V or W axis; engage simulates X, Y, Z "
+                         "and, with the machine's kinematics, A, B, C");
+  }
+}
+
+/// A tilted tool in a stock that cannot follow it, refused with the first such line.
+void refuseTilt(const Toolpath& path, const Stock& stock) {
+  if (stock.followsTiltedTools() || !tiltsTool(path)) return;
   for (const Move& m : path.moves)
-    if (m.otherAxes)
+    if (tiltsTool(m, path.kinematics))
       throw ParameterError(
           path.files[static_cast<std::size_t>(m.file)] + ":" + std::to_string(m.line) +
-          ": this line moves a rotary or UVW axis; engage simulates 3-axis milling");
+          ": the tool is tilted here (" + kinematicsTypeName(path.kinematics.type) +
+          " kinematics); the dexel stock's rays are vertical and cannot follow it: run it in "
+          "the voxel stock (--stock-model voxel)");
 }
 
 /// The analytic model of one feed step at stepover s and depth d (plunges: pi W(d)^2 F, no
@@ -247,7 +276,7 @@ class VisitedColumns {
     if (!fresh) it->second = std::min(it->second, p.z());
   }
   bool empty(int tool, const StepPath& sp, const AptCutter& cutter, double stockTop) const {
-    if ((sp.end.head<2>() - sp.start.head<2>()).squaredNorm() > 1e-24 ||
+    if (sp.tilted() || (sp.end.head<2>() - sp.start.head<2>()).squaredNorm() > 1e-24 ||
         cutter.parameters().taperAngleRad < 0.0)
       return false;
     const Eigen::Vector3d& low = sp.start.z() <= sp.end.z() ? sp.start : sp.end;
@@ -291,7 +320,7 @@ StepContact measureContact(const Move& m, const StepPath& sp, const Removal& rem
   StepContact c;
   const double h = stock.resolution();
   c.cutting = m.kind != MoveKind::Rapid && rem.volume > kAirVoxels * h * h * h;
-  if (!c.cutting) return c;
+  if (!c.cutting || sp.tilted()) return c;  // (a tilted tool's contact is not read yet)
   // The direction at the step's end, and how much of it is horizontal.
   const Eigen::Vector3d d = sp.end - sp.at(std::max(0.0, 1.0 - 1e-3));
   c.horizontal = d.norm() > 0.0 ? d.head<2>().norm() / d.norm() : 0.0;
@@ -359,14 +388,15 @@ void addPartSweeps(const SlimParts& slimParts, int tool, const StepPath& sp, dou
   const auto parts = slimParts.find(tool);
   if (parts == slimParts.end()) return;
   for (const auto& [part, slim] : parts->second) {
-    if (std::min(sp.start.z(), sp.end.z()) + part.zOffset >= stockTop) continue;
+    if (!sp.tilted() && std::min(sp.start.z(), sp.end.z()) + part.zOffset >= stockTop) continue;
     StepPath raised = sp;
-    const Eigen::Vector3d up(0.0, 0.0, part.zOffset);
-    raised.start += up;
-    raised.end += up;
-    raised.center += up;
-    for (Eigen::Vector3d& q : raised.points)
-      q += up;
+    // Up the tool's axis (turning with it on a 5-axis step).
+    raised.start += part.zOffset * sp.axisStart;
+    raised.end += part.zOffset * sp.axisEnd;
+    raised.center += part.zOffset * sp.axisStart;
+    for (std::size_t i = 0; i < raised.points.size(); ++i)
+      raised.points[i] += part.zOffset * sp.axisAt(static_cast<double>(i) /
+                                                   static_cast<double>(raised.points.size() - 1));
     const Sweep& slimSweep = sweeps.emplace_back(slim, raised, h);
     const Sweep& fullSweep = sweeps.emplace_back(part.shape, raised, h);
     c.parts.push_back({&slimSweep, &fullSweep, stockTop, kRapidNoiseVoxels * h * h * h});
@@ -444,6 +474,7 @@ void largestDifferences(SimulationResult& out) {
 SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock& stock,
                           const SimulationOptions& options) {
   refuseOtherAxes(path);
+  refuseTilt(path, stock);
   for (const Move& m : path.moves)
     (void)cutters.of(m.tool);  // every move has its cutter before anything is cut
   const double h = stock.resolution();
@@ -454,7 +485,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   const SlimParts slimParts = slimPartsOf(path, cutters, h);
 
   // Plan the steps first (for progress and for the records).
-  const std::vector<Planned> plan = planSteps(path, L, options.maxSteps);
+  const std::vector<Planned> plan = planSteps(path, cutters, L, options.maxSteps);
 
   // Steps go to the stock in batches where it can tell each step's contact as it was after
   // that step (Stock::readsWithinBatch) and nothing else reads it between them but their
@@ -496,7 +527,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       const Planned& p = plan[si];
       const Move& m = path.moves[p.move];
       Pending& b = batch.emplace_back();
-      b.sp = stepPath(m, p.t0, p.t1);
+      b.sp = stepPath(m, p.t0, p.t1, path.kinematics);
       b.r = plannedRecord(p, m, b.sp, arc);
       const AptCutter& cutter = cutters.of(m.tool);
       StepCut c{nullptr, static_cast<int>(si), b.r.dt, {}};
@@ -553,7 +584,10 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       // The cut's width, depth and angle from its contact; a plunge's from what it removed:
       // the cutter's diameter at that depth.
       const StepContact& contact = contacts[k];
-      if (contact.edge.any()) {
+      if (sp.tilted()) {
+        // A tilted tool's width and depth are in its own frame: not read yet.
+        r.width = r.depth = r.engagementRad = kNaN;
+      } else if (contact.edge.any()) {
         r.width = radialDepth(contact.edge);
         r.depth = axialDepth(contact.edge);
         r.engagementRad = contact.edge.exit - contact.edge.entry;
@@ -570,11 +604,18 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       if (r.curvature != 0.0 && r.removed > kAirVoxels * h * h * h)
         r.side = r.curvature * rem.lateral < 0.0 ? PathSide::Concave : PathSide::Convex;
 
-      if (options.physics) out.loads.push_back(stepLoad(*options.physics, r, contact, cutter, out));
+      if (options.physics && sp.tilted() && contact.cutting) {
+        ++out.tiltedSteps;  // (the contact in the tool's frame is not read yet)
+        out.loads.push_back(unmodelledLoad());
+      } else if (options.physics) {
+        out.loads.push_back(stepLoad(*options.physics, r, contact, cutter, out));
+      }
 
       // The analytic model of this step: its stepover and depth (given or measured).
       r.mrrExact = r.mrrPaper = 0.0;
-      if (contact.cutting)
+      if (sp.tilted())
+        r.mrrExact = r.mrrPaper = kNaN;  // (the model's cross-section is of a vertical tool)
+      else if (contact.cutting)
         analytic(r, cutter, sp,
                  options.stepover.value_or(std::min(r.width, 2.0 * cutter.maxRadius())),
                  std::min(options.depth.value_or(r.depth), cutter.height()));
@@ -602,6 +643,12 @@ SimulationResult analyticSteps(const Toolpath& path, const AptCutter& cutter,
 SimulationResult analyticSteps(const Toolpath& path, const CutterSet& cutters,
                                const SimulationOptions& options, bool stockOnRight) {
   refuseOtherAxes(path);
+  if (tiltsTool(path))
+    throw ParameterError(
+        "the analytic model is of a vertical tool, and this program tilts it "
+        "(" +
+        std::string(kinematicsTypeName(path.kinematics.type)) +
+        " kinematics): simulate it in a stock");
   if (!options.stepover || !options.depth)
     throw ParameterError("the analytic model without a stock needs --stepover and --depth");
   for (const Move& m : path.moves)
@@ -611,10 +658,10 @@ SimulationResult analyticSteps(const Toolpath& path, const CutterSet& cutters,
   SimulationResult out;
   out.volumeBefore = out.volumeAfter = kNaN;
   double arc = 0.0;
-  for (const Planned& p : planSteps(path, L, options.maxSteps)) {
+  for (const Planned& p : planSteps(path, cutters, L, options.maxSteps)) {
     if (stopRequested()) throw Interrupted();
     const Move& m = path.moves[p.move];
-    const StepPath sp = stepPath(m, p.t0, p.t1);
+    const StepPath sp = stepPath(m, p.t0, p.t1, path.kinematics);
     StepRecord r = plannedRecord(p, m, sp, arc);
     const AptCutter& cutter = cutters.of(m.tool);
     const double d = std::min(*options.depth, cutter.height());

@@ -9,6 +9,7 @@
 #include "engine/model/EngagementModel.h"
 #include "engine/physics/CuttingForces.h"
 #include "engine/physics/Material.h"
+#include "engine/sim/ToolPoses.h"
 #include "stock/Stock.h"
 
 #include <cmath>
@@ -169,11 +170,9 @@ struct SimulationResult {
   /// Cutting steps without horizontal motion of a cutter without a flat end (no load model).
   std::size_t plungeSteps = 0;
   std::size_t stoppedSteps = 0;  ///< cutting steps with no spindle speed (no load model)
+  /// Cutting steps of a tilted tool (a 4- or 5-axis machine): no load model yet.
+  std::size_t tiltedSteps = 0;
 };
-
-/// The tip path of move `m` between fractions t0 and t1 of it (a step's: StepRecord::t0, t1):
-/// a line, an XY arc or helix, or a polyline of 8 pieces for other arcs and splines.
-StepPath stepPath(const Move& m, double t0, double t1);
 
 /// Ask every simulation of this process to stop at its next step: simulate() and
 /// analyticSteps() then throw Interrupted, and the run unwinds like a failed one (its staging

@@ -206,3 +206,63 @@ TEST_CASE("the support function of a straight step's swept solid", "[cutters]") 
   const Eigen::Vector3d n(s, 0.0, -c);
   CHECK(ball.support(n) == Approx(3.0 - 3.0 * c + std::max(n.dot(p.start), n.dot(p.end))));
 }
+
+TEST_CASE("a tilted tool that keeps its axis sweeps the upright solid turned", "[cutters]") {
+  // A flat end mill lying along +Y (a 90 deg tilt), its end face at y = 5, its axis at z = -1,
+  // moving along X from 0 to 20: a box of x -3..23 (rounded ends), y 5..35, z -4..2. Hand
+  // values: outside, the distance to the nearest face; inside, the depth below the nearest
+  // instance's surface. 1e-9 mm is round-off.
+  const AptCutter c = AptCutter::flat(6.0, 30.0);
+  StepPath p;
+  p.start = {0, 5, -1};
+  p.end = {20, 5, -1};
+  p.axisStart = p.axisEnd = {0, 1, 0};
+  const Sweep s(c, p, 0.1);
+  CHECK(s.signedDistance({10, 4, -1}) == Approx(1.0).margin(1e-9));    // before the end face
+  CHECK(s.signedDistance({10, 20, 3}) == Approx(1.0).margin(1e-9));    // above the side
+  CHECK(s.signedDistance({10, 20, -1}) == Approx(-3.0).margin(1e-9));  // on the axis
+  CHECK(s.signedDistance({25, 20, -1}) == Approx(2.0).margin(1e-9));   // beyond the end's rim
+  CHECK(s.signedDistance({10, 36, -1}) == Approx(1.0).margin(1e-9));   // beyond the shank's end
+  Eigen::Vector3d g;
+  s.signedDistance({10, 20, 2.5}, &g);
+  CHECK((g - Eigen::Vector3d(0, 0, 1)).norm() < 1e-6);  // (central differences)
+  // The bounds hold the turned cylinder at both ends, no more.
+  CHECK(s.bounds().min.x() == Approx(-3.0).margin(1e-9));
+  CHECK(s.bounds().max.x() == Approx(23.0).margin(1e-9));
+  CHECK(s.bounds().min.y() == Approx(5.0).margin(1e-9));
+  CHECK(s.bounds().max.y() == Approx(35.0).margin(1e-9));
+  CHECK(s.bounds().min.z() == Approx(-4.0).margin(1e-9));
+  CHECK(s.bounds().max.z() == Approx(2.0).margin(1e-9));
+  // The support plane along +Z touches the top of the lying cylinder, exactly.
+  CHECK(s.support({0, 0, 1}) == Approx(2.0).margin(1e-9));
+}
+
+TEST_CASE("a ball end mill turned about its centre sweeps the ball", "[cutters]") {
+  // The axis turns 30 deg from +Z towards +X about the ball's centre c (the tip on the ball,
+  // at even steps of the turn): below and beside the centre the swept solid is the ball.
+  // Points within the resolution of the surface (beyond it only the sign is kept); the
+  // instances are sampled every half resolution of travel and refined by golden section:
+  // 1e-6 mm covers the refinement.
+  const double r = 3.0;
+  const AptCutter c = AptCutter::ball(2.0 * r, 18.0);
+  const Eigen::Vector3d centre(10, 10, 2);
+  StepPath p;
+  p.kind = StepPath::Kind::Polyline;
+  p.axisStart = {0, 0, 1};
+  p.axisEnd = {std::sin(kPi / 6), 0, std::cos(kPi / 6)};
+  for (int i = 0; i <= 8; ++i)
+    p.points.push_back(centre - r * p.axisAt(i / 8.0));
+  p.start = p.points.front();
+  p.end = p.points.back();
+  const Sweep s(c, p, 0.1);
+  CHECK(s.signedDistance(centre - Eigen::Vector3d(0, 0, r + 0.05)) == Approx(0.05).margin(1e-6));
+  CHECK(s.signedDistance(centre + Eigen::Vector3d(0, -(r + 0.02), 0)) == Approx(0.02).margin(1e-6));
+  const Eigen::Vector3d down(-std::sin(kPi / 12), 0, -std::cos(kPi / 12));  // mid-turn's tip side
+  CHECK(s.signedDistance(centre + (r + 0.03) * down) == Approx(0.03).margin(1e-6));
+  CHECK(s.signedDistance(centre + (r - 0.04) * down) == Approx(-0.04).margin(1e-6));
+  CHECK(s.signedDistance(centre - Eigen::Vector3d(0, 0, r + 2.0)) > 0.0);  // far: the sign
+  CHECK(s.signedDistance(centre) == Approx(-r).margin(1e-6));
+  // Above the equator on +X, 0.45 mm outside the ball, the shank turned towards +X covers it.
+  const Eigen::Vector3d side = centre + Eigen::Vector3d(r + 0.3, 0, 1.0);
+  CHECK(s.signedDistance(side) < 0.0);
+}

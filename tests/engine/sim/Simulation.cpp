@@ -251,14 +251,134 @@ TEST_CASE("paper Fig 9: uncut corner material raises the MRR before a 90 deg cor
 }
 
 TEST_CASE("programs that move rotary axes are refused with the line", "[sim]") {
-  const Toolpath path = readProgramText("G21\nG0 X0 Y0 Z5\nG0 A90\nM2\n", "rotary.ngc");
+  // Without the machine's kinematics rotary motion is refused; U, V, W motion always.
   Box3 b;
   b.min = {-10, -10, -10};
   b.max = {10, 10, 0};
   VoxelStock stock = VoxelStock::box(b, 0.5);
   CHECK_THROWS_WITH(
-      simulate(path, AptCutter::flat(6.0, 18.0), stock, {}),
-      Catch::Matchers::Contains("rotary.ngc:3: this line moves a rotary or UVW axis"));
+      simulate(readProgramText("G21\nG0 X0 Y0 Z5\nG0 A90\nM2\n", "rotary.ngc"),
+               AptCutter::flat(6.0, 18.0), stock, {}),
+      Catch::Matchers::Contains("rotary.ngc:3: this line moves a rotary axis: give the machine's "
+                                "kinematics"));
+  CHECK_THROWS_WITH(simulate(readProgramText("G21\nG0 X0 Y0 Z5\nG0 U3\nM2\n", "uvw.ngc"),
+                             AptCutter::flat(6.0, 18.0), stock, {}),
+                    Catch::Matchers::Contains("uvw.ngc:3: this line moves a U, V or W axis"));
+}
+
+namespace {
+
+/// Reader options for a machine of kinematics `k` whose tool starts at `start` (mm).
+ReaderOptions onMachine(const Kinematics& k, const Eigen::Vector3d& start) {
+  ReaderOptions o;
+  MachineSetup m;
+  m.name = "machine.json";
+  m.kinematics = k;
+  m.start = start;
+  o.machine = m;
+  return o;
+}
+
+/// Each source line's removal, mm^3 (index: the line).
+std::vector<double> removedByLine(const SimulationResult& r) {
+  std::vector<double> byLine;
+  for (const StepRecord& s : r.steps) {
+    if (byLine.size() <= static_cast<std::size_t>(s.line))
+      byLine.resize(static_cast<std::size_t>(s.line) + 1, 0.0);
+    byLine[static_cast<std::size_t>(s.line)] += s.removed;
+  }
+  return byLine;
+}
+
+/// The circular segment a ball of radius r leaves in a plane face it enters by depth d, mm^2.
+double segmentArea(double r, double d) {
+  return r * r * std::acos((r - d) / r) - (r - d) * std::sqrt(2.0 * r * d - d * d);
+}
+
+}  // namespace
+
+TEST_CASE("a tilted ball slot on a 4th axis: the segment's area times its length", "[sim]") {
+  // Table A about X, the controller holding the tip (tcp): at A30 the tool leans 30 deg
+  // towards +Y. The ball's centre 2 mm above the top face (it enters 1 mm, the shank's
+  // lowest point 0.5 mm above the face) crosses the whole 20 mm box along X: the removal is
+  // the ball's segment (r 3, depth 1) times 20 mm, 61.9496 mm^3. The voxel stock holds a slot
+  // within 0.02 % at D/20 (docs/accuracy.md); a tilted one within the same: 0.1 %.
+  Kinematics k;
+  k.type = Kinematics::Type::TableA;
+  k.tcp = true;
+  const double r = 3.0, a = kPi / 6;
+  char prog[256];
+  std::snprintf(prog, sizeof prog,
+                "G21 G90 G94\nG0 X-5 Y%.9f Z20 A30\nG0 Z%.9f\nG1 X25 F300\nG0 Z20\nM2\n",
+                10.0 - r * std::sin(a), 2.0 - r * std::cos(a));
+  const Toolpath path = readProgramText(prog, "tilted.ngc", onMachine(k, {-5, 10, 40}));
+  Box3 b;
+  b.min = {0, 0, -10};
+  b.max = {20, 20, 0};
+  VoxelStock stock = VoxelStock::box(b, 0.3);
+  const SimulationResult res = simulate(path, AptCutter::ball(6.0, 18.0), stock, {});
+  const double exact = segmentArea(r, 1.0) * 20.0;
+  CHECK(res.removed == Approx(exact).epsilon(1e-3));
+  CHECK(res.collisions.empty());
+  // A tilted step's width, depth and model are not read (NaN), its volume is.
+  const StepRecord& mid = res.steps[res.steps.size() / 2];
+  CHECK(std::isnan(mid.width));
+  CHECK(std::isnan(mid.mrrExact));
+
+  // The same cut with the joints programmed (no tcp): the machine's Z and Y are the tip turned
+  // by Rx(30 deg) about the table's axis through the origin.
+  k.tcp = false;
+  const Eigen::Vector3d tip(0.0, 10.0 - r * std::sin(a), 2.0 - r * std::cos(a));
+  const double y = std::cos(a) * tip.y() - std::sin(a) * tip.z();
+  const double z = std::sin(a) * tip.y() + std::cos(a) * tip.z();
+  std::snprintf(prog, sizeof prog,
+                "G21 G90 G94\nG0 X-5 Y%.9f Z30 A30\nG0 Z%.9f\nG1 X25 F300\nG0 Z30\nM2\n", y, z);
+  VoxelStock again = VoxelStock::box(b, 0.3);
+  const SimulationResult joints =
+      simulate(readProgramText(prog, "joints.ngc", onMachine(k, {-5, 10, 40})),
+               AptCutter::ball(6.0, 18.0), again, {});
+  CHECK(joints.removed == Approx(res.removed).epsilon(1e-9));
+
+  // The dexel stock's rays are vertical: refused with the line.
+  DexelStock dexels = DexelStock::box(b, 0.3);
+  CHECK_THROWS_WITH(simulate(path, AptCutter::ball(6.0, 18.0), dexels, {}),
+                    Catch::Matchers::Contains("tilted.ngc:2: the tool is tilted here"));
+}
+
+TEST_CASE("a head-head machine turns a ball about its centre: only the carried ball cuts",
+          "[sim]") {
+  // Head B/C with the pivot at the ball's centre (pivot length r): the joints are the centre
+  // less r. A plunge 1 mm into the top face takes the cap pi d^2 (3r - d) / 3; turning B to
+  // 30 deg about the centre takes nothing (the shank stays 0.5 mm above the face); turning
+  // back while the centre moves 10 mm along X takes the segment times 10 mm (the cap moved
+  // ahead, the one behind already cut); turning B and C at X20 takes nothing. Tolerances: the
+  // voxel stock's slot (0.1 %, as above); nothing within a fifth of a cell's volume.
+  Kinematics k;
+  k.type = Kinematics::Type::HeadBC;
+  k.pivotLength = 3.0;
+  const double r = 3.0, h = 0.3;
+  const Toolpath path = readProgramText(
+      "G21 G90 G94\nG0 X10 Y10 Z10 B0 C0\nG1 Z-1 F100\nG1 B30 F200\nG1 X20 B0 F300\n"
+      "G1 B-20 C45\nG0 Z10\nM2\n",
+      "head.ngc", onMachine(k, {10, 10, 20}));
+  Box3 b;
+  b.min = {0, 0, -10};
+  b.max = {30, 20, 0};
+  VoxelStock stock = VoxelStock::box(b, h);
+  const SimulationResult res = simulate(path, AptCutter::ball(2.0 * r, 18.0), stock, {});
+  const std::vector<double> byLine = removedByLine(res);
+  REQUIRE(byLine.size() >= 7);
+  CHECK(byLine[3] == Approx(kPi * (3.0 * r - 1.0) / 3.0).epsilon(1e-3));
+  CHECK(byLine[4] < 0.2 * h * h * h);
+  CHECK(byLine[5] == Approx(segmentArea(r, 1.0) * 10.0).epsilon(1e-3));
+  CHECK(byLine[6] < 0.2 * h * h * h);
+  CHECK(res.collisions.empty());
+  // A rotary-only feed move at F deg/min takes its angle over F (LinuxCNC's feed for rotary
+  // axes alone): B 0 -> 30 at F200, 9 s.
+  double turnSeconds = 0.0;
+  for (const StepRecord& s : res.steps)
+    if (s.line == 4) turnSeconds += s.dt;
+  CHECK(turnSeconds == Approx(30.0 / 200.0 * 60.0).epsilon(1e-9));
 }
 
 TEST_CASE("analytic steps without a stock: the side from the stock's side of the path", "[sim]") {
