@@ -210,7 +210,7 @@ double CutterSet::smallestRadius() const {
 double stepCount(const Toolpath& path, double L) {
   double steps = 0.0;
   for (const Move& m : path.moves) {
-    const double len = moveLength(m);
+    const double len = moveTravel(m, path.kinematics, 0.0);
     if (len > 0.0) steps += std::max(1.0, std::ceil(len / L - 1e-9));
   }
   return steps;
@@ -222,7 +222,7 @@ void checkStepCount(const Toolpath& path, double L, std::size_t maxSteps) {
   double longest = 0.0;
   const Move* longestMove = nullptr;
   for (const Move& m : path.moves) {
-    const double len = moveLength(m);
+    const double len = moveTravel(m, path.kinematics, 0.0);
     if (len > longest) {
       longest = len;
       longestMove = &m;
@@ -535,7 +535,9 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       // starts: a tool put down in the stock is measured).
       for (; visitedUpTo < p.move; ++visitedUpTo)
         visited.add(path.moves[visitedUpTo].tool, path.moves[visitedUpTo].end);
-      if (!visited.empty(m.tool, b.sp, cutter, stockTop)) {  // (else removes nothing)
+      // (The columns are the moves' ends in the work frame: the part's only without rotary
+      // kinematics.)
+      if (path.kinematics.rotary() || !visited.empty(m.tool, b.sp, cutter, stockTop)) {
         c.sweep = &sweeps.emplace_back(cutter, b.sp, h, stockTop);
         const Box3 box = c.sweep->bounds();
         columns +=

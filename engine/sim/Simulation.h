@@ -187,7 +187,8 @@ bool stopRequested() noexcept;
 void checkStepCount(const Toolpath& path, double stepLength, std::size_t maxSteps);
 
 /// The steps `path` makes at steps of at most `stepLength` (mm): each move of some length
-/// in whole steps, at least one.
+/// in whole steps, at least one (on a rotary machine, of the tip's travel on the part: the
+/// simulation's steps also bound the rest of the tool's travel, and can be more).
 double stepCount(const Toolpath& path, double stepLength);
 
 /// Run a tool path through a stock, each step with the cutter of the tool in the spindle.
