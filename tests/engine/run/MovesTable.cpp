@@ -1,0 +1,34 @@
+// Tests of engine/run/MovesTable.h: the columns a 3-axis program and a rotary machine's get.
+
+#include "engine/run/MovesTable.h"
+
+#include "engine/gcode/GcodeReader.h"
+
+#include <catch2/catch.hpp>
+
+#include <string>
+
+using namespace engage;
+
+TEST_CASE("the moves table: a 3-axis program's columns, and a rotary machine's axes and G93 time",
+          "[run]") {
+  const std::string program = "G21 G90\nG0 X0 Y0 Z10\nG1 X10 F200\nG93 G1 X20 B30 F4\nM2\n";
+  // 3 axes (no kinematics): the rotary words are not columns.
+  CHECK(movesTable(readProgramText("G21 G90\nG0 X0 Y0 Z10\nG1 X10 F200\nM2\n", "flat.ngc")) ==
+        "line,kind,x,y,z,cx,cy,cz,plane,turns,feed_mm_min\n"
+        "2,rapid,0.000000,0.000000,10.000000,,,,,,\n"
+        "3,line,10.000000,0.000000,10.000000,,,,,,200\n");
+  // A head-head machine: B and C at each move's end; the G93 move lasts 1/F = 0.25 min, its
+  // feed column the XYZ speed that takes (10 mm in 0.25 min: 40 mm/min).
+  ReaderOptions o;
+  MachineSetup m;
+  m.name = "head.json";
+  m.kinematics.type = Kinematics::Type::HeadBC;
+  m.kinematics.pivotLength = 100.0;
+  o.machine = m;
+  CHECK(movesTable(readProgramText(program, "head.ngc", o)) ==
+        "line,kind,x,y,z,a_deg,b_deg,c_deg,cx,cy,cz,plane,turns,feed_mm_min,minutes\n"
+        "2,rapid,0.000000,0.000000,10.000000,0.000000,0.000000,0.000000,,,,,,,\n"
+        "3,line,10.000000,0.000000,10.000000,0.000000,0.000000,0.000000,,,,,,200,\n"
+        "4,line,20.000000,0.000000,10.000000,0.000000,30.000000,0.000000,,,,,,40,0.25\n");
+}
