@@ -160,6 +160,16 @@ bool StepPath::tilted() const {
   return (axisStart - z).squaredNorm() > 1e-24 || (axisEnd - z).squaredNorm() > 1e-24;
 }
 
+bool StepPath::turning() const {
+  return (axisStart - axisEnd).squaredNorm() > 1e-24;
+}
+
+Eigen::Matrix3d StepPath::toolToPart() const {
+  if ((axisEnd - Eigen::Vector3d::UnitZ()).squaredNorm() <= 1e-24)
+    return Eigen::Matrix3d::Identity();
+  return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), axisEnd).toRotationMatrix();
+}
+
 Eigen::Vector3d StepPath::axisAt(double u) const {
   u = std::clamp(u, 0.0, 1.0);
   const double angle = std::acos(std::clamp(axisStart.dot(axisEnd), -1.0, 1.0));
@@ -179,10 +189,7 @@ Eigen::Vector3d StepPath::at(double u) const {
       return onArc(*this, std::hypot(start.x() - center.x(), start.y() - center.y()),
                    std::atan2(start.y() - center.y(), start.x() - center.x()), u);
     case Kind::Polyline: {
-      double total = 0.0;
-      for (std::size_t i = 1; i < points.size(); ++i)
-        total += (points[i] - points[i - 1]).norm();
-      double target = u * total;
+      double target = u * length();
       for (std::size_t i = 1; i < points.size(); ++i) {
         const double l = (points[i] - points[i - 1]).norm();
         if (target <= l && l > 0.0) return points[i - 1] + target / l * (points[i] - points[i - 1]);
@@ -194,6 +201,24 @@ Eigen::Vector3d StepPath::at(double u) const {
   return end;
 }
 
+double StepPath::length() const {
+  switch (kind) {
+    case Kind::Line:
+      break;
+    case Kind::ArcXY:
+      return std::hypot(
+          std::hypot(start.x() - center.x(), start.y() - center.y()) * std::abs(sweepRad),
+          end.z() - start.z());
+    case Kind::Polyline: {
+      double total = 0.0;
+      for (std::size_t i = 1; i < points.size(); ++i)
+        total += (points[i] - points[i - 1]).norm();
+      return total;
+    }
+  }
+  return (end - start).norm();
+}
+
 Eigen::Vector2d StepPath::feedDirectionAtEnd() const {
   Eigen::Vector3d tangent = end - at(std::max(0.0, 1.0 - 1e-3));
   if (kind == Kind::ArcXY) {
@@ -201,7 +226,9 @@ Eigen::Vector2d StepPath::feedDirectionAtEnd() const {
     tangent =
         sweepRad >= 0 ? Eigen::Vector3d(-r.y(), r.x(), 0.0) : Eigen::Vector3d(r.y(), -r.x(), 0.0);
   }
-  const Eigen::Vector2d u = tangent.head<2>();
+  const Eigen::Vector2d u = tilted()
+                                ? Eigen::Vector2d((toolToPart().transpose() * tangent).head<2>())
+                                : tangent.head<2>();
   return u.norm() < 1e-12 ? Eigen::Vector2d(1.0, 0.0) : Eigen::Vector2d(u.normalized());
 }
 
@@ -214,10 +241,9 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
     throw ParameterError("a step's tool axis must be a unit vector");
   if (path.tilted()) {
     ceiling = std::numeric_limits<double>::infinity();  // (a height says little of a tilted tool)
-    if ((path.axisStart - path.axisEnd).norm() <= 1e-12) {
+    if (!path.turning()) {
       rotated_ = true;
-      toWorld_ = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), path.axisStart)
-                     .toRotationMatrix();
+      toWorld_ = path.toolToPart();
       path_ = inToolFrame(path, toWorld_, resolution);
     } else {
       turning_ = true;
@@ -225,8 +251,10 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
   }
   // Tip positions that bound the path: ends, polyline points, and the arc's axis extremes.
   std::vector<Eigen::Vector3d> extremes{path_.start, path_.end};
-  double length = (path_.end - path_.start).norm();
-  bool flatHeight = std::abs(path_.end.z() - path_.start.z()) <= kFlatZ;
+  double length = path_.length();
+  // (Polylines always sample: arcs in other planes, splines.)
+  bool flatHeight =
+      path_.kind != StepPath::Kind::Polyline && std::abs(path_.end.z() - path_.start.z()) <= kFlatZ;
   if (path_.kind == StepPath::Kind::ArcXY) {
     arcRadius_ = std::hypot(path_.start.x() - path_.center.x(), path_.start.y() - path_.center.y());
     arcStartRad_ =
@@ -237,15 +265,8 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
         extremes.emplace_back(path_.center.x() + arcRadius_ * std::cos(a),
                               path_.center.y() + arcRadius_ * std::sin(a), path_.start.z());
     }
-    length = std::hypot(arcRadius_ * std::abs(path_.sweepRad), path_.end.z() - path_.start.z());
   } else if (path_.kind == StepPath::Kind::Polyline) {
     extremes.insert(extremes.end(), path_.points.begin(), path_.points.end());
-    length = 0.0;
-    for (std::size_t i = 1; i < path_.points.size(); ++i) {
-      length += (path_.points[i] - path_.points[i - 1]).norm();
-      flatHeight = flatHeight && std::abs(path_.points[i].z() - path_.start.z()) <= kFlatZ;
-    }
-    flatHeight = false;  // polylines always sample (arcs in other planes, splines)
   }
   flat_ = flatHeight && !turning_;
   const auto& corners = cutter_.corners();
@@ -395,18 +416,9 @@ double Sweep::turningDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradien
   const double bound =
       (closestOnSegment(p, middle0_, middle1_) - p).norm() - middleSpread_ - reach_;
   if (bound > band_) return bound;
-  // The samples alone: no point of the cutter moves further than `gap` between two of them,
-  // so beyond the band by more than that their minimum has the swept distance's sign.
-  double best = 1.0, nearest = 0.0;
-  for (std::size_t i = 0; i < samples_.size(); ++i) {
-    const double v = alongAxis(cutter_, p - sampleTips_[i], sampleAxes_[i]);
-    if (i == 0 || v < nearest) {
-      nearest = v;
-      best = samples_[i];
-    }
-  }
-  if (std::abs(nearest) > band_ + gap_) return nearest > 0.0 ? nearest - gap_ : nearest;
-  const double d = sampled(p, best);
+  double best = 1.0;
+  const double d = sampled(p, best, band_);
+  if (std::isnan(best)) return d;  // (beyond the band: the sign is what counts)
   if (closest) *closest = best;
   const double e = resolution_ / 8.0;
   auto f = [&](const Eigen::Vector3d& x) { return instance(x, best); };
@@ -665,7 +677,8 @@ double Sweep::facesInFrame(const Eigen::Vector3d& p, double radius, Eigen::Vecto
         distances[i] = m[i]->dot(at - nearest->at);
       }
       count = 2;
-      return flat_ ? cutter_.profileSignedDistance(rho, at.y()) : signedDistance(p);
+      return flat_ ? cutter_.profileSignedDistance(rho, at.y())
+                   : distance(p, nullptr, nullptr, nullptr);  // (p is in the step's frame)
     }
   }
   count = 1;
@@ -687,7 +700,7 @@ double Sweep::facesInFrame(const Eigen::Vector3d& p, double radius, Eigen::Vecto
   return d;
 }
 
-double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter) const {
+double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter, double looseBeyond) const {
   auto f = [&](double u) { return instance(p, u); };
   // The best of the candidates (value, parameter) seen so far.
   double bestValue = 0.0;
@@ -739,6 +752,13 @@ double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter) const {
                               : cutter_.signedDistance(p - sampleTips_[i]);
     if (!any || v < bestValue) best = i;
     consider(samples_[i], v);
+  }
+  // No point of the cutter moves further than gap_ between two samples: beyond the surface by
+  // more than that (and looseBeyond) their minimum, less gap_ outside, has the swept
+  // distance's sign.
+  if (std::abs(bestValue) > looseBeyond + gap_) {
+    bestParameter = std::numeric_limits<double>::quiet_NaN();
+    return bestValue > 0.0 ? bestValue - gap_ : bestValue;
   }
   // Refine on the bracket around the best sample.
   golden(samples_[best > 0 ? best - 1 : 0], samples_[std::min(best + 1, samples_.size() - 1)], 12);

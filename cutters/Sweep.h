@@ -50,12 +50,21 @@ struct StepPath {
 
   /// Whether the tool's axis is anything but +Z on the step.
   bool tilted() const;
+  /// Whether the axis turns over the step (a simultaneous 4- or 5-axis step).
+  bool turning() const;
+  /// The rotation from the tool's frame at the step's end to the part's: its z the axis at
+  /// the end, its x and y turned from the part's by the shortest rotation (the identity for an
+  /// upright tool). The frame a tilted step's cut is read in.
+  Eigen::Matrix3d toolToPart() const;
   /// The tool's axis at parameter u in [0, 1].
   Eigen::Vector3d axisAt(double u) const;
+  /// The tip's path length, mm (a helix's with its rise).
+  double length() const;
   /// Tip position at parameter u in [0, 1] (arc length fraction for lines and arcs).
   Eigen::Vector3d at(double u) const;
-  /// Unit direction of travel in XY at the step's end (the arc's tangent for arcs); +X for
-  /// steps without horizontal motion (plunges), as a reference direction.
+  /// Unit direction of travel across the tool at the step's end (the arc's tangent for arcs),
+  /// in the tool's frame (toolToPart: XY for an upright tool); +X for steps without such
+  /// motion (plunges), as a reference direction.
   Eigen::Vector2d feedDirectionAtEnd() const;
 };
 
@@ -133,8 +142,12 @@ class Sweep {
   /// parameter of the closest tool position in `closest` (NaN otherwise).
   double distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* curvature,
                   double* closest) const;
-  /// Minimum over the step of the cutter's distance; the minimising parameter in `best`.
-  double sampled(const Eigen::Vector3d& p, double& best) const;
+  /// Minimum over the step of the cutter's distance; the minimising parameter in `best`. Where
+  /// the samples' minimum lies further than `looseBeyond` (mm) from the surface, it is
+  /// returned unrefined (outside, less how far the cutter moves between samples: a bound of
+  /// the right sign) and `best` is NaN.
+  double sampled(const Eigen::Vector3d& p, double& best,
+                 double looseBeyond = std::numeric_limits<double>::infinity()) const;
   /// XY distance from p to a height-keeping step's path, with its gradient (unit, or zero
   /// on the path) and the curvature of its level line through p, 1/mm (its second
   /// derivative across the gradient: 0 beside a line, +-1/distance about a point or an arc's

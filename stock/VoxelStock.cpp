@@ -453,9 +453,12 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
     centreDistance.push_back(dc);
   });
 
-  // Feed direction at the step's end, for the width and the engagement angle.
+  // Feed direction at the step's end, for the width and the engagement angle; heights and
+  // sides in the tool's frame (a tilted tool's).
   const StepPath& path = sweep.path();
   const Eigen::Vector3d end = path.end;
+  const bool tilted = path.tilted();
+  const Eigen::Matrix3d toTool = path.toolToPart().transpose();
   const Eigen::Vector2d u = path.feedDirectionAtEnd();
   const Eigen::Vector2d n(-u.y(), u.x());
   const AptCutter& cutter = sweep.cutter();
@@ -501,7 +504,7 @@ Removal VoxelStock::remove(const Sweep& sweep, int stepIndex, double dtSeconds) 
           // crossing it at the right sub-voxel height (exactly for axis-aligned boundaries).
           // Slivers of a hundredth of a voxel (a wall a later pass runs along again, its
           // planes' round-off) count in the volume but do not deepen the cut.
-          const Eigen::Vector3d rel = p - end;
+          const Eigen::Vector3d rel = tilted ? Eigen::Vector3d(toTool * (p - end)) : p - end;
           const double side = rel.head<2>().dot(n);
           r.lateralMoment += lost * voxelVolume * side;
           if (lost < kEngagedShare) continue;

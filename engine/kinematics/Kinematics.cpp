@@ -84,18 +84,23 @@ Eigen::Matrix3d Kinematics::tableRotation(const Eigen::Vector3d& abc) const {
   return Eigen::Matrix3d::Identity();
 }
 
-ToolPose Kinematics::pose(const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc) const {
+Eigen::Vector3d Kinematics::headAxis(const Eigen::Vector3d& abc) const {
   const double b = abc.y() * kPi / 180.0, c = abc.z() * kPi / 180.0;
+  if (type == Type::HeadBC)
+    return {-std::sin(b) * std::cos(c), -std::sin(b) * std::sin(c), std::cos(b)};
+  if (type == Type::HeadBTableC) return {-std::sin(b), 0.0, std::cos(b)};
+  return Eigen::Vector3d::UnitZ();
+}
+
+Eigen::Vector3d Kinematics::axis(const Eigen::Vector3d& abc) const {
+  return tableRotation(abc).transpose() * headAxis(abc);
+}
+
+ToolPose Kinematics::pose(const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc) const {
   // The head's turn of the tool in the machine frame, and the tip's offset from where it is
   // with the head upright (the pivot stays pivotLength above that point).
-  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
-  Eigen::Vector3d headOffset = Eigen::Vector3d::Zero();
-  if (type == Type::HeadBC)
-    axis = Eigen::Vector3d(-std::sin(b) * std::cos(c), -std::sin(b) * std::sin(c), std::cos(b));
-  else if (type == Type::HeadBTableC)
-    axis = Eigen::Vector3d(-std::sin(b), 0.0, std::cos(b));
-  if (type == Type::HeadBC || type == Type::HeadBTableC)
-    headOffset = pivotLength * (Eigen::Vector3d::UnitZ() - axis);
+  const Eigen::Vector3d axis = headAxis(abc);
+  const Eigen::Vector3d headOffset = pivotLength * (Eigen::Vector3d::UnitZ() - axis);
   const Eigen::Matrix3d toPart = tableRotation(abc).transpose();
   ToolPose pose;
   pose.axis = toPart * axis;

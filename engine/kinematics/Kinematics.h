@@ -58,9 +58,15 @@ struct Kinematics {
   bool rotary() const { return type != Type::Trivial; }
   /// The tool's pose for axis positions `xyz` (mm) and `abc` (degrees).
   ToolPose pose(const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc) const;
+  /// The tool's axis on the part for angles `abc` (degrees): pose(xyz, abc).axis for any xyz.
+  Eigen::Vector3d axis(const Eigen::Vector3d& abc) const;
   /// The rotation that takes the part frame to the machine's (a table's turn; the identity for
   /// a head's).
   Eigen::Matrix3d tableRotation(const Eigen::Vector3d& abc) const;
+
+ private:
+  /// The head's turn of the tool in the machine's frame (+Z without a head).
+  Eigen::Vector3d headAxis(const Eigen::Vector3d& abc) const;
 };
 
 /// "trivial", "table-a", "table-b", "table-ac", "table-bc", "head-bc", "head-b-table-c".

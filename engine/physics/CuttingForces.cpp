@@ -65,6 +65,17 @@ struct Directions {
   Eigen::Vector3d t, r, a;
 };
 
+/// Where a slice's edge is integrated (EdgeSlice::middle): its length, mm, and its lead angle,
+/// rad, and radius, mm, there.
+struct Edge {
+  double length, kappa, radius;
+};
+
+Edge edgeOf(const EdgeSlice& s) {
+  if (s.middle.length > 0.0) return {s.middle.length, s.middle.kappa, s.middle.radius};
+  return {s.dz / std::max(std::sin(s.kappa), 1e-6), s.kappa, s.radius};
+}
+
 Directions directions(double phi, double kappa) {
   const double s = std::sin(phi), c = std::cos(phi), sk = std::sin(kappa), ck = std::cos(kappa);
   Directions d;
@@ -140,8 +151,8 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
     }
   }
   for (const EdgeSlice& s : slices) {
-    const double sk = std::sin(s.kappa);
-    const double db = s.dz / std::max(sk, 1e-6);
+    const Edge q = edgeOf(s);
+    const double sk = std::sin(q.kappa);
     for (const auto& arc : s.arcs) {
       const double half = 0.5 * (arc[1] - arc[0]), mid = 0.5 * (arc[1] + arc[0]);
       // The thickest chip: at phi = pi/2 when the arc holds it.
@@ -149,11 +160,11 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
                                 ? 1.0
                                 : std::max(std::sin(arc[0]), std::sin(arc[1]));
       out.hMax = std::max(out.hMax, fz * sinMax * sk);
-      for (std::size_t q = 0; q < g.x.size(); ++q) {
-        const double phi = mid + half * g.x[q];
-        const double w = half * g.w[q] * db;
+      for (std::size_t i = 0; i < g.x.size(); ++i) {
+        const double phi = mid + half * g.x[i];
+        const double w = half * g.w[i] * q.length;
         const double h = fz * std::max(0.0, std::sin(phi)) * sk;
-        addMean(w, s.radius, h, element(material, h), directions(phi, s.kappa));
+        addMean(w, q.radius, h, element(material, h), directions(phi, q.kappa));
       }
     }
   }
@@ -187,14 +198,14 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
     Sample& sm = samples[static_cast<std::size_t>(m)];
     const double theta = pitch * m / kRotationSamples;
     for (const EdgeSlice& s : slices) {
-      const double sk = std::sin(s.kappa);
-      const double db = s.dz / std::max(sk, 1e-6);
+      const Edge q = edgeOf(s);
+      const double sk = std::sin(q.kappa);
       for (int j = 0; j < N; ++j) {
         double phi = std::fmod(theta + j * pitch - s.z * lagPerMm, 2.0 * kPi);
         if (phi < 0.0) phi += 2.0 * kPi;
         if (!engaged(s, phi)) continue;
         const double h = fz * std::max(0.0, std::sin(phi)) * sk;
-        sm.add(db, element(material, h), directions(phi, s.kappa));
+        sm.add(q.length, element(material, h), directions(phi, q.kappa));
       }
     }
     // Each tooth's lip on the end face, along the radius at the tooth's angle.

@@ -49,7 +49,8 @@ struct Teeth {
 /// The feed scales s (scheduled feed / programmed feed) at which StepLoad::peakAt is kept.
 constexpr std::array<double, 6> kPeakScales{0.25, 0.5, 1.0, 1.5, 2.0, 4.0};
 
-/// The load of one step at its programmed feed. Machine frame; N, N*m, W, mm.
+/// The load of one step at its programmed feed. The machine's frame (the part's where a 4- or
+/// 5-axis machine tilts the tool: engine/sim turns it there); N, N*m, W, mm.
 struct StepLoad {
   /// The contact's immersion angles (EdgeEngagement::entry, exit), rad; NaN without contact.
   double entry = 0.0, exit = 0.0;

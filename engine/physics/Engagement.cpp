@@ -57,6 +57,62 @@ double edgeOffset(double radius, double phi, const Eigen::Vector2d& feed,
   return pathOffset(radius * (std::sin(phi) * feed + std::cos(phi) * side), feed, side, curvature);
 }
 
+/// The middle of `cutter`'s edge between heights z0 and z1 by length along the profile: the
+/// profile in 16 chords (the first chord of a ball's tip strays from its arc by a few 1e-4 of
+/// its length).
+EdgeSlice::Middle edgeMiddle(const AptCutter& cutter, double z0, double z1) {
+  constexpr int kChords = 16;
+  std::array<Eigen::Vector2d, kChords + 1> p;
+  std::array<double, kChords + 1> along{};
+  for (int i = 0; i <= kChords; ++i) {
+    const double z = z0 + (z1 - z0) * i / kChords;
+    p[static_cast<std::size_t>(i)] = {cutter.radiusAt(z), z};
+    if (i > 0)
+      along[static_cast<std::size_t>(i)] =
+          along[static_cast<std::size_t>(i - 1)] +
+          (p[static_cast<std::size_t>(i)] - p[static_cast<std::size_t>(i - 1)]).norm();
+  }
+  EdgeSlice::Middle m;
+  m.length = along.back();
+  std::size_t j = 0;
+  while (j + 2 < along.size() && along[j + 1] < 0.5 * m.length)
+    ++j;
+  const Eigen::Vector2d chord = p[j + 1] - p[j];
+  const double piece = along[j + 1] - along[j];
+  const double f = piece > 0.0 ? (0.5 * m.length - along[j]) / piece : 0.5;
+  m.radius = p[j].x() + f * chord.x();
+  m.kappa = std::atan2(chord.y(), chord.x());
+  return m;
+}
+
+/// The stock's material read from a tool's frame (Stock::materialReader): points given in the
+/// frame turned about the tip by `toPart` (its z the tool's axis) are read where they lie on
+/// the part. An upright tool's points are read as they are.
+class FramedReader {
+ public:
+  FramedReader(const Stock& stock, std::size_t afterStep, const Eigen::Vector3d& tip,
+               const Eigen::Matrix3d& toPart)
+      : reader_(stock.materialReader(afterStep)),
+        tip_(tip),
+        toPart_(toPart),
+        upright_(toPart.isIdentity(0.0)) {}
+
+  const std::vector<std::uint8_t>& read(const std::vector<Eigen::Vector3d>& points) {
+    if (upright_) return reader_->read(points);
+    turned_.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+      turned_[i] = tip_ + toPart_ * (points[i] - tip_);
+    return reader_->read(turned_);
+  }
+
+ private:
+  std::unique_ptr<MaterialReader> reader_;
+  Eigen::Vector3d tip_;
+  Eigen::Matrix3d toPart_;
+  bool upright_;
+  std::vector<Eigen::Vector3d> turned_;
+};
+
 }  // namespace
 
 bool FaceContact::any() const {
@@ -64,7 +120,8 @@ bool FaceContact::any() const {
 }
 
 FaceContact measureFace(const Stock& stock, const AptCutter& cutter, const Eigen::Vector3d& tip,
-                        const Eigen::Vector2d& feedDir, bool clockwise, std::size_t afterStep) {
+                        const Eigen::Vector2d& feedDir, bool clockwise, std::size_t afterStep,
+                        const Eigen::Matrix3d& toPart) {
   constexpr int kRings = 8, kFaceAngles = 72;
   FaceContact out;
   const Eigen::Vector2d u =
@@ -93,8 +150,8 @@ FaceContact measureFace(const Stock& stock, const AptCutter& cutter, const Eigen
       points.emplace_back(p.x(), p.y(), below);
     }
   }
-  const std::unique_ptr<MaterialReader> reader = stock.materialReader(afterStep);
-  out.onMaterial = reader->read(points);
+  FramedReader reader(stock, afterStep, tip, toPart);
+  out.onMaterial = reader.read(points);
   return out;
 }
 
@@ -103,7 +160,7 @@ FaceContact measureFace(const Stock& stock, const AptCutter& cutter, const Eigen
 EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
                                  const Eigen::Vector3d& tip, const Eigen::Vector2d& feedDir,
                                  bool clockwise, double zTop, double curvature,
-                                 std::size_t afterStep) {
+                                 std::size_t afterStep, const Eigen::Matrix3d& toPart) {
   EdgeEngagement out;
   out.entry = out.exit = std::numeric_limits<double>::quiet_NaN();
   const double h = stock.resolution();
@@ -118,7 +175,7 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
   const int n = std::clamp(static_cast<int>(std::ceil(zTop / h)), 1, kMaxSlices);
   const double dz = zTop / n;
   const double eps = kOutside * h;
-  const std::unique_ptr<MaterialReader> reader = stock.materialReader(afterStep);
+  FramedReader reader(stock, afterStep, tip, toPart);
 
   std::vector<EdgeSlice> slices;
   std::vector<std::array<double, 2>> lead;  // per slice: sin and cos of its lead angle
@@ -170,7 +227,7 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
       for (const Eigen::Vector2d& e : sample)
         points.emplace_back(tip.x() + reach * e.x(), tip.y() + reach * e.y(), z);
     }
-    const std::vector<std::uint8_t>& in = reader->read(points);
+    const std::vector<std::uint8_t>& in = reader.read(points);
     for (std::size_t q = 0; q < list.size(); ++q) {
       std::copy_n(in.begin() + static_cast<std::ptrdiff_t>(q * (kAngleSamples + 1)),
                   kAngleSamples + 1,
@@ -247,7 +304,7 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
         points.push_back(wall ? wallPoint(list[i].slice, e, offset)
                               : point(list[i].slice, e, offset));
       }
-      const std::vector<std::uint8_t>& mid = reader->read(points);
+      const std::vector<std::uint8_t>& mid = reader.read(points);
       for (std::size_t i = 0; i < list.size(); ++i) {
         Edge& e = list[i];
         const bool low = (mid[i] != 0) == e.loIn;
@@ -348,7 +405,7 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
       for (const std::size_t q : pending)
         for (std::size_t t = 0; t < newCount; ++t)
           points.push_back(wallPoint(walls[q].slice, sampleDirection(q, newSamples[t]), offset));
-      const std::vector<std::uint8_t>& in = reader->read(points);
+      const std::vector<std::uint8_t>& in = reader.read(points);
       std::size_t kept = 0;
       for (std::size_t p = 0; p < pending.size(); ++p) {
         const std::size_t q = pending[p];
@@ -506,13 +563,15 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
   }
   if (out.slices.empty()) return out;
   // The contact's top and bottom to a slice's middle: found between the last slice in contact
-  // and the next one's middle (or the flutes' top), at the middle of the end slice's widest
-  // arc, and that slice made to end there.
-  auto widestMiddle = [](const EdgeSlice& s) {
+  // and the next one's middle (or the flutes' top), at the middle and just inside both ends of
+  // the end slice's widest arc (a face the tool meets at a slant reaches highest at an end),
+  // the furthest of them, and that slice made to end there.
+  auto widestAngles = [](const EdgeSlice& s) {
     std::array<double, 2> best = s.arcs.front();
     for (const auto& a : s.arcs)
       if (a[1] - a[0] > best[1] - best[0]) best = a;
-    return 0.5 * (best[0] + best[1]);
+    const double inside = std::min(kShortestArc / 4.0, 0.25 * (best[1] - best[0]));
+    return std::array<double, 3>{0.5 * (best[0] + best[1]), best[0] + inside, best[1] - inside};
   };
   // Slice k's point at height z, angle phi.
   auto at = [&](std::size_t k, double z, double phi) {
@@ -520,11 +579,11 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
   };
   auto bisect = [&](std::size_t k, double in, double air, double phi) {
     points.assign({at(k, air, phi)});
-    if (reader->read(points)[0] != 0 || !(cutter.radiusAt(air) > 1e-9)) return kNaN;
+    if (reader.read(points)[0] != 0 || !(cutter.radiusAt(air) > 1e-9)) return kNaN;
     for (int round = 0; round < kRefinements + 4; ++round) {
       const double mid = 0.5 * (in + air);
       points.assign({at(k, mid, phi)});
-      (reader->read(points)[0] != 0 ? in : air) = mid;
+      (reader.read(points)[0] != 0 ? in : air) = mid;
     }
     return 0.5 * (in + air);
   };
@@ -532,7 +591,15 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     EdgeSlice& top = out.slices.back();
     const bool last = kept.back() + 1 == slices.size();
     const double bottom = top.z - 0.5 * top.dz;
-    const double end = bisect(kept.back(), top.z, last ? zTop : top.z + top.dz, widestMiddle(top));
+    double end = kNaN;
+    for (const double phi : widestAngles(top)) {
+      // Up to the next slice's middle, or the one after where the next's contact at this
+      // angle was too short to keep.
+      double e = bisect(kept.back(), top.z, last ? zTop : top.z + top.dz, phi);
+      if (std::isnan(e) && !last)
+        e = bisect(kept.back(), top.z, std::min(zTop, top.z + 2.0 * top.dz), phi);
+      if (!std::isnan(e) && !(e <= end)) end = e;  // (the highest)
+    }
     if (!std::isnan(end)) {
       top.dz = end - bottom;
       top.z = 0.5 * (bottom + end);
@@ -543,7 +610,13 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     EdgeSlice& low = out.slices.front();
     const double top = low.z + 0.5 * low.dz;
     if (kept.front() > 0 && low.z - low.dz > 0.0) {
-      const double end = bisect(kept.front(), low.z, low.z - low.dz, widestMiddle(low));
+      double end = kNaN;
+      for (const double phi : widestAngles(low)) {
+        double e = bisect(kept.front(), low.z, low.z - low.dz, phi);
+        if (std::isnan(e) && low.z - 2.0 * low.dz > 0.0)
+          e = bisect(kept.front(), low.z, low.z - 2.0 * low.dz, phi);
+        if (!std::isnan(e) && !(e >= end)) end = e;  // (the lowest)
+      }
       if (!std::isnan(end)) {
         low.dz = top - end;
         low.z = 0.5 * (top + end);
@@ -551,6 +624,8 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
       }
     }
   }
+  for (EdgeSlice& s : out.slices)
+    s.middle = edgeMiddle(cutter, s.z - 0.5 * s.dz, s.z + 0.5 * s.dz);
   return out;
 }
 

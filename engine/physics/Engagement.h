@@ -40,6 +40,14 @@ struct EdgeSlice {
   /// the edge dz / sin(kappa) long.
   double kappa = 0.0;
   std::vector<std::array<double, 2>> arcs;  ///< engaged immersion angles [from, to], rad
+  /// Where the force model takes the slice: the middle of its edge by length along the
+  /// profile (near a ball's tip well below the middle height, where kappa and the edge's
+  /// length per height change fastest), the edge's `length` over the slice (mm), and the lead
+  /// angle (rad) and radius (mm) there. `length` 0 (a contact put together by hand): the
+  /// slice's own, dz / sin(kappa) at kappa and radius.
+  struct Middle {
+    double length = 0.0, kappa = 0.0, radius = 0.0;
+  } middle;
 };
 
 /// The contact of one step's end position.
@@ -73,7 +81,8 @@ struct FaceContact {
 /// angles (5 degrees), each point read a tenth of a cell below the face.
 FaceContact measureFace(const Stock& stock, const AptCutter& cutter, const Eigen::Vector3d& tip,
                         const Eigen::Vector2d& feed, bool clockwise,
-                        std::size_t afterStep = Stock::kLatest);
+                        std::size_t afterStep = Stock::kLatest,
+                        const Eigen::Matrix3d& toPart = Eigen::Matrix3d::Identity());
 
 /// Measure the contact of `cutter` with its tip at `tip`, moving horizontally along `feed`
 /// (any length, not zero), spinning clockwise seen from above (M3) or not (M4), up to `zTop`
@@ -87,10 +96,15 @@ FaceContact measureFace(const Stock& stock, const AptCutter& cutter, const Eigen
 /// points followed back to the edge (exact for plane and cylindrical walls). The top and
 /// bottom slices end where the contact does, found by bisection. Arcs and gaps shorter than 2
 /// degrees are dropped. docs/physics.md "The contact"; accuracy: docs/accuracy.md.
+///
+/// A tilted tool (a 4- or 5-axis step) is measured in its own frame: `toPart` turns that frame
+/// about the tip into the part's (its z the tool's axis, StepPath::toolToPart); `feed`, the
+/// curvature, heights and the result's angles and frame are then the tool frame's.
 EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
                                  const Eigen::Vector3d& tip, const Eigen::Vector2d& feed,
                                  bool clockwise, double zTop, double curvature = 0.0,
-                                 std::size_t afterStep = Stock::kLatest);
+                                 std::size_t afterStep = Stock::kLatest,
+                                 const Eigen::Matrix3d& toPart = Eigen::Matrix3d::Identity());
 
 /// The radial depth of cut a_e of a contact, mm: per slice, how far the arcs in contact
 /// reach across the path, measured from the path's centre line (straight) or as distances

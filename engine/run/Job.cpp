@@ -752,9 +752,10 @@ void stockOptions(Job& job, const OptionValues& values,
   // stock unless told otherwise: the dexel stock's rays are vertical (the simulation refuses
   // a tilted tool in it, naming the line).
   const std::string model = text("stock-model");
-  job.stockModel = model == "voxel" || (model.empty() && tiltsTool(job.path)) ? StockModel::Voxel
-                                                                              : StockModel::Dexel;
-  if (job.crossCheck && tiltsTool(job.path))
+  const bool tilts = tiltsTool(job.path);
+  job.stockModel =
+      model == "voxel" || (model.empty() && tilts) ? StockModel::Voxel : StockModel::Dexel;
+  if (job.crossCheck && tilts)
     throw ParameterError(
         "--cross-check needs the dexel stock too, whose vertical rays cannot "
         "follow this program's tilted tool (" +
@@ -851,11 +852,14 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
     so.stepover = parseQuantity(text("stepover"), Dimension::Length, sys, "--stepover").value;
   if (!text("depth").empty())
     so.depth = parseQuantity(text("depth"), Dimension::Length, sys, "--depth").value;
-  if (job.scheduling() && std::any_of(job.path.moves.begin(), job.path.moves.end(),
-                                      [](const Move& m) { return turnsRotary(m); }))
-    throw ParameterError(
-        "re-feeding a program that turns rotary axes is not built yet (its "
-        "feeds would be re-written as inverse time): simulate it");
+  if (job.scheduling())
+    for (const Move& m : job.path.moves)
+      if (m.kind != MoveKind::Rapid && turnsRotary(m))  // (rapids that index them are kept)
+        throw ParameterError(
+            job.path.files[static_cast<std::size_t>(m.file)] + ":" + std::to_string(m.line) +
+            ": this feed move turns rotary axes; re-feeding such moves is not built yet (their "
+            "feeds would be re-written as inverse time): simulate the program, or re-feed one "
+            "whose rotary axes move in rapids only (3+2)");
   if (job.scheduling()) job.schedule = scheduleOptions(values, sys, job);
   so.physics = physicsOptions(values, sys);
   stockOptions(job, values, project, sys);

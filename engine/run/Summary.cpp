@@ -255,23 +255,22 @@ ordered_json physicsJson(const RunResult& result) {
                      {"line", result.sim.steps.empty() ? 0 : result.sim.steps[p.step[k]].line}};
     return j;
   };
-  ordered_json j = {{"material", m.name},
-                    {"file", m.path},
-                    {"model", linear ? "linear" : "kienzle"},
-                    {"coefficients", coefficients},
-                    {"source", m.source},
-                    {"conditions", m.conditions},
-                    {"helix_deg", std::round(o.helix * kDegPerRad * 1e9) / 1e9},
-                    {"peaks", peaks(physicsPeaks(result, false))},
-                    {"steps_without_model",
-                     {{"plunge", result.sim.plungeSteps},
-                      {"spindle_stopped", result.sim.stoppedSteps},
-                      {"tilted", result.sim.tiltedSteps}}},
-                    {"unit_labels",
-                     {{"chip", std::string(unitLabel(Dimension::Length, sys))},
-                      {"force", std::string(unitLabel(Dimension::Force, sys))},
-                      {"torque", std::string(unitLabel(Dimension::Torque, sys))},
-                      {"power", std::string(unitLabel(Dimension::Power, sys))}}}};
+  ordered_json j = {
+      {"material", m.name},
+      {"file", m.path},
+      {"model", linear ? "linear" : "kienzle"},
+      {"coefficients", coefficients},
+      {"source", m.source},
+      {"conditions", m.conditions},
+      {"helix_deg", std::round(o.helix * kDegPerRad * 1e9) / 1e9},
+      {"peaks", peaks(physicsPeaks(result, false))},
+      {"steps_without_model",
+       {{"plunge", result.sim.plungeSteps}, {"spindle_stopped", result.sim.stoppedSteps}}},
+      {"unit_labels",
+       {{"chip", std::string(unitLabel(Dimension::Length, sys))},
+        {"force", std::string(unitLabel(Dimension::Force, sys))},
+        {"torque", std::string(unitLabel(Dimension::Torque, sys))},
+        {"power", std::string(unitLabel(Dimension::Power, sys))}}}};
   if (job.scheduling()) j["peaks_scheduled"] = peaks(physicsPeaks(result, true));
   return j;
 }
@@ -682,10 +681,6 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
           "feeds were kept at most as programmed (line(s) " +
           lineList(lines) + ")");
   }
-  if (result.sim.tiltedSteps > 0)
-    w.push_back(std::to_string(result.sim.tiltedSteps) +
-                " cutting step(s) of a tilted tool (a 4- or 5-axis machine): their contact in the "
-                "tool's frame is not read yet, their chip and forces are left empty (NaN)");
   if (result.sim.stoppedSteps > 0)
     w.push_back(std::to_string(result.sim.stoppedSteps) +
                 " cutting step(s) with the spindle stopped or no S word: no chip or forces; "

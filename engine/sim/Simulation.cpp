@@ -48,6 +48,24 @@ double curvatureOf(const Move& m) {
   return r > 0.0 ? (m.turns > 0 ? 1.0 : -1.0) / r : 0.0;
 }
 
+/// The signed curvature of step `sp` of move `m` at its end across the tool, 1/mm (+ turning
+/// left seen from the spindle's side): curvatureOf for an upright tool; for a tilted one, an
+/// arc's through its last three points seen along the axis (exact for an arc across the tool,
+/// as a table machine carries an XY arc of the joints).
+double toolCurvature(const Move& m, const StepPath& sp) {
+  if (!sp.tilted()) return curvatureOf(m);
+  const std::size_t n = sp.points.size();
+  if (m.kind != MoveKind::Arc || n < 3) return 0.0;
+  const Eigen::Matrix3d toTool = sp.toolToPart().transpose();
+  const Eigen::Vector2d a = (toTool * sp.points[n - 3]).head<2>();
+  const Eigen::Vector2d b = (toTool * sp.points[n - 2]).head<2>();
+  const Eigen::Vector2d c = (toTool * sp.points[n - 1]).head<2>();
+  const Eigen::Vector2d ab = b - a, bc = c - b;
+  const double lengths = ab.norm() * bc.norm() * (c - a).norm();
+  // Menger's curvature: four times the triangle's area over its sides' product.
+  return lengths > 0.0 ? 2.0 * (ab.x() * bc.y() - ab.y() * bc.x()) / lengths : 0.0;
+}
+
 /// A count or length for a message, six significant digits ("1.33333e+09").
 std::string formatCount(double v) {
   char buf[32];
@@ -106,12 +124,7 @@ StepRecord plannedRecord(const Planned& p, const Move& m, const StepPath& sp, do
   if (turnsRotary(m)) {
     // The rotary axes turn: the time is the move's share of its duration, the length the
     // tip's travel on the part, the feed the tip's speed there.
-    double tipTravel = (sp.end - sp.start).norm();
-    if (!sp.points.empty()) {
-      tipTravel = 0.0;
-      for (std::size_t i = 1; i < sp.points.size(); ++i)
-        tipTravel += (sp.points[i] - sp.points[i - 1]).norm();
-    }
+    const double tipTravel = sp.length();
     arc += tipTravel - r.length;
     r.length = tipTravel;
     r.arcLength = arc;
@@ -139,7 +152,7 @@ void refuseOtherAxes(const Toolpath& path) {
 
 /// A tilted tool in a stock that cannot follow it, refused with the first such line.
 void refuseTilt(const Toolpath& path, const Stock& stock) {
-  if (stock.followsTiltedTools() || !tiltsTool(path)) return;
+  if (stock.followsTiltedTools()) return;
   for (const Move& m : path.moves)
     if (tiltsTool(m, path.kinematics))
       throw ParameterError(
@@ -150,9 +163,10 @@ void refuseTilt(const Toolpath& path, const Stock& stock) {
 }
 
 /// The analytic model of one feed step at stepover s and depth d (plunges: pi W(d)^2 F, no
-/// paper form); NaN where the model has no steady state.
-void analytic(StepRecord& r, const AptCutter& cutter, const StepPath& sp, double s, double d) {
-  const Eigen::Vector3d travel = sp.end - sp.start;
+/// paper form), the step's `travel` in the tool's frame; NaN where the model has no steady
+/// state.
+void analytic(StepRecord& r, const AptCutter& cutter, const Eigen::Vector3d& travel, double s,
+              double d) {
   if (travel.head<2>().norm() <= 1e-9 && r.kind == MoveKind::Line) {
     // A plunge: the cross-section normal to the motion is the cutter's slice where it
     // enters the material, pi W(depth)^2; the paper has no form for it.
@@ -258,38 +272,63 @@ void addCollision(std::vector<Collision>& list, const Collision& c) {
   list.push_back(c);
 }
 
-/// Where each tool's tip has been: the lowest height at each exact XY of a move's end. A
-/// vertical step (a plunge or a retract) at an XY where the same tool's tip has already been at
-/// or below the step's lower end, the cutter's top then at or above the stock's (starting) top,
-/// can reach no material: that copy of the cutter swept the whole column above it, and for a
-/// cutter that widens upwards what moving up adds lies above its top (material never grows).
-/// Such a step removes nothing, exactly: measuring it took what the stock model's shares of
-/// partly covered cells, evaluated a second time for the same body, found left (a ball end
-/// mill's retract after a ramp 0.042 mm^3 in dexels at D/20, retracts in voxels up to
-/// 0.0075 mm^3, tests/stock/ReferenceCuts.cpp; a raster's plunge back to where an earlier one
-/// went, 0.011 mm^3 in dexels, the random campaign's seed 19). A tool buried deeper than its
-/// flutes is measured.
+/// Where each tool's tip has been: the lowest height at each exact XY of a move's end (to 1e-9
+/// mm for a tilted tool), in the tool's frame (StepPath::toolToPart; XY and Z for an upright
+/// tool), for each axis the tool held. A step along the tool's axis (a plunge or a retract) at an
+/// XY where the same tool's tip, held on the same axis, has already been at or below the step's
+/// lower end, the cutter's top then at or beyond the stock's extent along the axis, can reach no
+/// material: that copy of the cutter swept the whole column above it, and for a cutter that widens
+/// upwards what moving up adds lies above its top (material never grows). Such a step removes
+/// nothing, exactly: measuring it took what the stock model's shares of partly covered cells,
+/// evaluated a second time for the same body, found left (a ball end mill's retract after a
+/// ramp 0.042 mm^3 in dexels at D/20, retracts in voxels up to 0.0075 mm^3,
+/// tests/stock/ReferenceCuts.cpp; a raster's plunge back to where an earlier one went, 0.011
+/// mm^3 in dexels, the random campaign's seed 19). A tool buried deeper than its flutes is
+/// measured.
 class VisitedColumns {
  public:
-  void add(int tool, const Eigen::Vector3d& p) {
-    const auto [it, fresh] = lowest_.try_emplace(Key{tool, p.x(), p.y()}, p.z());
-    if (!fresh) it->second = std::min(it->second, p.z());
+  /// Tool `tool`'s tip at `tip` on the unit axis `axis` (the part's frame).
+  void add(int tool, const Eigen::Vector3d& tip, const Eigen::Vector3d& axis) {
+    StepPath at;
+    at.axisEnd = axis;
+    // (Evaluated as empty() evaluates a step's ends, to the last bit: the keys are exact.)
+    const Eigen::Matrix3d toTool = at.toolToPart().transpose();
+    const Eigen::Vector3d q = toTool * tip;
+    const auto [it, fresh] =
+        lowest_.try_emplace(Key{tool, axis, snap(axis, q.x()), snap(axis, q.y())}, q.z());
+    if (!fresh) it->second = std::min(it->second, q.z());
   }
-  bool empty(int tool, const StepPath& sp, const AptCutter& cutter, double stockTop) const {
-    if (sp.tilted() || (sp.end.head<2>() - sp.start.head<2>()).squaredNorm() > 1e-24 ||
-        cutter.parameters().taperAngleRad < 0.0)
-      return false;
-    const Eigen::Vector3d& low = sp.start.z() <= sp.end.z() ? sp.start : sp.end;
+  bool empty(int tool, const StepPath& sp, const AptCutter& cutter, const Box3& stock) const {
+    if (sp.turning() || cutter.parameters().taperAngleRad < 0.0) return false;
+    const Eigen::Matrix3d toTool = sp.toolToPart().transpose();
+    const Eigen::Vector3d a = toTool * sp.start, b = toTool * sp.end;
+    if ((b.head<2>() - a.head<2>()).squaredNorm() > 1e-24) return false;
+    const Eigen::Vector3d& low = a.z() <= b.z() ? a : b;
+    // The stock's furthest extent along the axis: its box's corner furthest that way.
+    double top = -std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 8; ++k)
+      top = std::max(top, sp.axisEnd.dot(Eigen::Vector3d((k & 1) ? stock.max.x() : stock.min.x(),
+                                                         (k & 2) ? stock.max.y() : stock.min.y(),
+                                                         (k & 4) ? stock.max.z() : stock.min.z())));
     // The step's own XY may differ from a move's end by rounding in its t: those are measured.
-    const auto it = lowest_.find(Key{tool, low.x(), low.y()});
-    return it != lowest_.end() && it->second <= low.z() && it->second + cutter.height() >= stockTop;
+    const auto it =
+        lowest_.find(Key{tool, sp.axisEnd, snap(sp.axisEnd, low.x()), snap(sp.axisEnd, low.y())});
+    return it != lowest_.end() && it->second <= low.z() && it->second + cutter.height() >= top;
   }
 
  private:
+  /// A tool-frame coordinate as a key: exact for an upright tool (a step along Z keeps its X
+  /// and Y to the last bit); to 1e-9 mm for a tilted one, whose turn rounds them along a step.
+  static double snap(const Eigen::Vector3d& axis, double v) {
+    return axis == Eigen::Vector3d::UnitZ() ? v : std::round(v * 1e9) / 1e9;
+  }
   struct Key {
     int tool;
+    Eigen::Vector3d axis;
     double x, y;
-    bool operator==(const Key& o) const { return tool == o.tool && x == o.x && y == o.y; }
+    bool operator==(const Key& o) const {
+      return tool == o.tool && axis == o.axis && x == o.x && y == o.y;
+    }
   };
   struct Hash {
     std::size_t operator()(const Key& k) const {
@@ -308,29 +347,49 @@ class VisitedColumns {
 struct StepContact {
   bool cutting = false;  ///< not a rapid, and removed more than air's rounding
   EdgeEngagement edge;
-  FaceContact face;         ///< where the step descends
-  double horizontal = 0.0;  ///< the horizontal share of the step's direction at its end
-  double descent = 0.0;     ///< the downward share of it (0 where it keeps height or rises)
-  double rpm = 0.0;         ///< the spindle speed the step runs at (0: stopped or unknown)
+  FaceContact face;  ///< where the step descends
+  /// The share of the step's direction at its end across the tool (horizontal for an upright
+  /// tool), and the share along its axis towards the tip (0 where it keeps height or rises).
+  double horizontal = 0.0;
+  double descent = 0.0;
+  double rpm = 0.0;  ///< the spindle speed the step runs at (0: stopped or unknown)
+  /// The speed the chip is taken at, mm/min: where the axis turns, that of the point on it at
+  /// the corner's centre height (StepContact's direction); NaN: the step's feed.
+  double feed = std::numeric_limits<double>::quiet_NaN();
 };
 
-StepContact measureContact(const Move& m, const StepPath& sp, const Removal& rem,
+StepContact measureContact(const Move& m, const StepPath& sp, double dtSeconds, const Removal& rem,
                            const AptCutter& cutter, const Stock& stock, double spindleRpm,
                            std::size_t afterStep, bool physics) {
   StepContact c;
   const double h = stock.resolution();
   c.cutting = m.kind != MoveKind::Rapid && rem.volume > kAirVoxels * h * h * h;
-  if (!c.cutting || sp.tilted()) return c;  // (a tilted tool's contact is not read yet)
-  // The direction at the step's end, and how much of it is horizontal.
-  const Eigen::Vector3d d = sp.end - sp.at(std::max(0.0, 1.0 - 1e-3));
+  if (!c.cutting) return c;
+  // The direction of motion at the step's end in the tool's frame (a tilted tool's:
+  // StepPath::toolToPart), and how much of it is across the tool. While the axis turns, the
+  // motion of the point on the axis at the corner's centre height over the step's last piece
+  // (of even time): a ball's centre, about which the axis's turn moves the ball along its own
+  // sphere, cutting nothing.
+  Eigen::Vector3d travel = sp.end - sp.at(std::max(0.0, 1.0 - 1e-3));
+  if (sp.turning() && sp.points.size() >= 2) {
+    const std::size_t n = sp.points.size();
+    const double pieces = static_cast<double>(n - 1);
+    travel =
+        sp.points[n - 1] - sp.points[n - 2] +
+        cutter.parameters().cornerCenterHeight * (sp.axisEnd - sp.axisAt((pieces - 1.0) / pieces));
+    if (dtSeconds > 0.0) c.feed = travel.norm() / (dtSeconds / 60.0 / pieces);
+  }
+  const Eigen::Matrix3d toPart = sp.toolToPart();
+  const Eigen::Vector3d d = toPart.transpose() * travel;
   c.horizontal = d.norm() > 0.0 ? d.head<2>().norm() / d.norm() : 0.0;
   c.descent = d.norm() > 0.0 ? std::max(0.0, -d.z() / d.norm()) : 0.0;
   c.rpm = m.spindleRpm != 0.0 ? m.spindleRpm : spindleRpm;
   if (physics && c.descent > 1e-3)  // (only the load needs it)
-    c.face = measureFace(stock, cutter, sp.end, d.head<2>(), c.rpm >= 0.0, afterStep);
+    c.face = measureFace(stock, cutter, sp.end, d.head<2>(), c.rpm >= 0.0, afterStep, toPart);
   if (c.horizontal < 1e-3) return c;
   c.edge = measureEngagement(stock, cutter, sp.end, d.head<2>(), c.rpm >= 0.0,
-                             std::min(cutter.height(), rem.top + h), curvatureOf(m), afterStep);
+                             std::min(cutter.height(), rem.top + h), toolCurvature(m, sp),
+                             afterStep, toPart);
   return c;
 }
 
@@ -348,7 +407,7 @@ StepLoad stepLoad(const PhysicsOptions& o, const StepRecord& r, const StepContac
     return unmodelledLoad();
   }
   const int flutes = cutter.fluteCount();
-  const double perTooth = r.feed / (std::abs(c.rpm) * flutes);
+  const double perTooth = (std::isnan(c.feed) ? r.feed : c.feed) / (std::abs(c.rpm) * flutes);
   const double fz = c.horizontal < 1e-3 ? 0.0 : perTooth * c.horizontal;
   StepLoad l = cuttingLoad(c.edge, o.material, {flutes, o.helix, cutter.maxRadius()}, fz, c.rpm,
                            {&c.face, perTooth * c.descent});
@@ -481,7 +540,8 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
   const double L = options.stepLength > 0.0 ? options.stepLength : 2.5 * h;
   SimulationResult out;
   out.volumeBefore = stock.volume();
-  const double stockTop = stock.bounds().max.z();
+  const Box3 stockBox = stock.bounds();
+  const double stockTop = stockBox.max.z();
   const SlimParts slimParts = slimPartsOf(path, cutters, h);
 
   // Plan the steps first (for progress and for the records).
@@ -533,11 +593,15 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       StepCut c{nullptr, static_cast<int>(si), b.r.dt, {}};
       // The tip has been at the end of every move before this one (not where the program
       // starts: a tool put down in the stock is measured).
-      for (; visitedUpTo < p.move; ++visitedUpTo)
-        visited.add(path.moves[visitedUpTo].tool, path.moves[visitedUpTo].end);
-      // (The columns are the moves' ends in the work frame: the part's only without rotary
-      // kinematics.)
-      if (path.kinematics.rotary() || !visited.empty(m.tool, b.sp, cutter, stockTop)) {
+      for (; visitedUpTo < p.move; ++visitedUpTo) {
+        const Move& done = path.moves[visitedUpTo];
+        if (path.kinematics.rotary())
+          visited.add(done.tool, path.kinematics.pose(done.end, done.rotaryEnd).tip,
+                      path.kinematics.axis(done.rotaryEnd));
+        else
+          visited.add(done.tool, done.end, Eigen::Vector3d::UnitZ());
+      }
+      if (!visited.empty(m.tool, b.sp, cutter, stockBox)) {
         c.sweep = &sweeps.emplace_back(cutter, b.sp, h, stockTop);
         const Box3 box = c.sweep->bounds();
         columns +=
@@ -562,8 +626,9 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       if (batch[k].cut < 0) return;
       const Move& m = path.moves[plan[first + k].move];
       contacts[k] = measureContact(
-          m, batch[k].sp, removals[static_cast<std::size_t>(batch[k].cut)], cutters.of(m.tool),
-          stock, spindleRpm, batches ? static_cast<std::size_t>(batch[k].cut) : Stock::kLatest,
+          m, batch[k].sp, batch[k].r.dt, removals[static_cast<std::size_t>(batch[k].cut)],
+          cutters.of(m.tool), stock, spindleRpm,
+          batches ? static_cast<std::size_t>(batch[k].cut) : Stock::kLatest,
           options.physics.has_value());
     };
     if (batch.size() > 1)
@@ -582,14 +647,11 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       r.removed = rem.volume;
       r.voxelsChanged = static_cast<std::int32_t>(rem.voxelsChanged);
       r.mrr = r.dt > 0.0 ? r.removed / (r.dt / 60.0) : 0.0;
-      r.curvature = curvatureOf(m);
+      r.curvature = toolCurvature(m, sp);
       // The cut's width, depth and angle from its contact; a plunge's from what it removed:
       // the cutter's diameter at that depth.
       const StepContact& contact = contacts[k];
-      if (sp.tilted()) {
-        // A tilted tool's width and depth are in its own frame: not read yet.
-        r.width = r.depth = r.engagementRad = kNaN;
-      } else if (contact.edge.any()) {
+      if (contact.edge.any()) {
         r.width = radialDepth(contact.edge);
         r.depth = axialDepth(contact.edge);
         r.engagementRad = contact.edge.exit - contact.edge.entry;
@@ -606,21 +668,24 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       if (r.curvature != 0.0 && r.removed > kAirVoxels * h * h * h)
         r.side = r.curvature * rem.lateral < 0.0 ? PathSide::Concave : PathSide::Convex;
 
-      if (options.physics && sp.tilted() && contact.cutting) {
-        ++out.tiltedSteps;  // (the contact in the tool's frame is not read yet)
-        out.loads.push_back(unmodelledLoad());
-      } else if (options.physics) {
-        out.loads.push_back(stepLoad(*options.physics, r, contact, cutter, out));
+      if (options.physics) {
+        StepLoad load = stepLoad(*options.physics, r, contact, cutter, out);
+        if (sp.tilted()) load.force = sp.toolToPart() * load.force;  // (the part's frame)
+        out.loads.push_back(load);
       }
 
       // The analytic model of this step: its stepover and depth (given or measured).
       r.mrrExact = r.mrrPaper = 0.0;
-      if (sp.tilted())
-        r.mrrExact = r.mrrPaper = kNaN;  // (the model's cross-section is of a vertical tool)
-      else if (contact.cutting)
-        analytic(r, cutter, sp,
+      if (contact.cutting) {
+        // (While the axis turns, at the speed the chip is taken at.)
+        StepRecord at = r;
+        if (!std::isnan(contact.feed)) at.feed = contact.feed;
+        analytic(at, cutter, sp.toolToPart().transpose() * (sp.end - sp.start),
                  options.stepover.value_or(std::min(r.width, 2.0 * cutter.maxRadius())),
                  std::min(options.depth.value_or(r.depth), cutter.height()));
+        r.mrrExact = at.mrrExact;
+        r.mrrPaper = at.mrrPaper;
+      }
       out.steps.push_back(r);
       if (options.progress && (si % 256 == 0 || si + 1 == plan.size()))
         options.progress(si + 1, plan.size());
@@ -674,7 +739,7 @@ SimulationResult analyticSteps(const Toolpath& path, const CutterSet& cutters,
     if (r.curvature != 0.0)
       r.side = (r.curvature > 0.0) == stockOnRight ? PathSide::Concave : PathSide::Convex;
     r.mrrExact = r.mrrPaper = 0.0;
-    if (m.kind != MoveKind::Rapid) analytic(r, cutter, sp, *options.stepover, d);
+    if (m.kind != MoveKind::Rapid) analytic(r, cutter, sp.end - sp.start, *options.stepover, d);
     out.steps.push_back(r);
   }
   return out;

@@ -170,8 +170,6 @@ struct SimulationResult {
   /// Cutting steps without horizontal motion of a cutter without a flat end (no load model).
   std::size_t plungeSteps = 0;
   std::size_t stoppedSteps = 0;  ///< cutting steps with no spindle speed (no load model)
-  /// Cutting steps of a tilted tool (a 4- or 5-axis machine): no load model yet.
-  std::size_t tiltedSteps = 0;
 };
 
 /// Ask every simulation of this process to stop at its next step: simulate() and

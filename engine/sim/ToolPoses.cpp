@@ -37,13 +37,13 @@ bool turnsRotary(const Move& m) {
 
 bool tiltsTool(const Move& m, const Kinematics& k) {
   if (!k.rotary()) return false;
-  const int samples = turnsRotary(m) ? 32 : 1;
-  for (int i = 0; i <= samples; ++i) {
-    const double t = static_cast<double>(i) / samples;
-    if ((k.pose(pointAt(m, t), rotaryAt(m, t)).axis - Eigen::Vector3d::UnitZ()).squaredNorm() >
-        1e-24)
-      return true;
-  }
+  auto tilted = [&](double t) {
+    return (k.axis(rotaryAt(m, t)) - Eigen::Vector3d::UnitZ()).squaredNorm() > 1e-24;
+  };
+  if (!turnsRotary(m)) return tilted(0.0);
+  constexpr int kSamples = 32;
+  for (int i = 0; i <= kSamples; ++i)
+    if (tilted(static_cast<double>(i) / kSamples)) return true;
   return false;
 }
 
@@ -60,7 +60,7 @@ StepPath stepPath(const Move& m, double t0, double t1, const Kinematics& k) {
   };
   if (!turnsRotary(m)) {
     // The kinematics carry the whole move rigidly (a rotation and a shift).
-    const Eigen::Vector3d axis = k.pose(p.start, m.rotaryStart).axis;
+    const Eigen::Vector3d axis = k.axis(m.rotaryStart);
     p.axisStart = p.axisEnd = axis;
     const bool upright = (axis - Eigen::Vector3d::UnitZ()).squaredNorm() <= 1e-24;
     if (p.kind == StepPath::Kind::ArcXY && !upright) {
@@ -84,12 +84,13 @@ StepPath stepPath(const Move& m, double t0, double t1, const Kinematics& k) {
   q.kind = StepPath::Kind::Polyline;
   for (int i = 0; i <= kPieces; ++i) {
     const double t = t0 + (t1 - t0) * i / kPieces;
-    q.points.push_back(tipAt(pointAt(m, t), t));
+    const ToolPose pose = k.pose(pointAt(m, t), rotaryAt(m, t));
+    q.points.push_back(pose.tip);
+    if (i == 0) q.axisStart = pose.axis;
+    if (i == kPieces) q.axisEnd = pose.axis;
   }
   q.start = q.points.front();
   q.end = q.points.back();
-  q.axisStart = k.pose(pointAt(m, t0), rotaryAt(m, t0)).axis;
-  q.axisEnd = k.pose(pointAt(m, t1), rotaryAt(m, t1)).axis;
   return q;
 }
 

@@ -207,17 +207,23 @@ TEST_CASE("the support function of a straight step's swept solid", "[cutters]") 
   CHECK(ball.support(n) == Approx(3.0 - 3.0 * c + std::max(n.dot(p.start), n.dot(p.end))));
 }
 
+namespace {
+/// A straight step from tip `from` to `to` of a tool lying along +Y.
+StepPath lyingAlongY(const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
+  StepPath p;
+  p.start = from;
+  p.end = to;
+  p.axisStart = p.axisEnd = {0, 1, 0};
+  return p;
+}
+}  // namespace
+
 TEST_CASE("a tilted tool that keeps its axis sweeps the upright solid turned", "[cutters]") {
   // A flat end mill lying along +Y (a 90 deg tilt), its end face at y = 5, its axis at z = -1,
   // moving along X from 0 to 20: a box of x -3..23 (rounded ends), y 5..35, z -4..2. Hand
   // values: outside, the distance to the nearest face; inside, the depth below the nearest
   // instance's surface. 1e-9 mm is round-off.
-  const AptCutter c = AptCutter::flat(6.0, 30.0);
-  StepPath p;
-  p.start = {0, 5, -1};
-  p.end = {20, 5, -1};
-  p.axisStart = p.axisEnd = {0, 1, 0};
-  const Sweep s(c, p, 0.1);
+  const Sweep s(AptCutter::flat(6.0, 30.0), lyingAlongY({0, 5, -1}, {20, 5, -1}), 0.1);
   CHECK(s.signedDistance({10, 4, -1}) == Approx(1.0).margin(1e-9));    // before the end face
   CHECK(s.signedDistance({10, 20, 3}) == Approx(1.0).margin(1e-9));    // above the side
   CHECK(s.signedDistance({10, 20, -1}) == Approx(-3.0).margin(1e-9));  // on the axis
@@ -235,6 +241,29 @@ TEST_CASE("a tilted tool that keeps its axis sweeps the upright solid turned", "
   CHECK(s.bounds().max.z() == Approx(2.0).margin(1e-9));
   // The support plane along +Z touches the top of the lying cylinder, exactly.
   CHECK(s.support({0, 0, 1}) == Approx(2.0).margin(1e-9));
+}
+
+TEST_CASE("a tilted plunge's faces near the rim are the turned solid's", "[cutters]") {
+  // The same flat end mill lying along +Y, plunging along its axis from its end face at y = 5
+  // to y = 3 (axis at x 10, z -1). Beside the rim the swept solid is the cylinder's side and
+  // end face: at (10, 2.9, -1 + 3.05) the side is 0.05 mm and the end face 0.1 mm away
+  // (outside both: the corner's distance is their hypotenuse), and localFaces gives the two
+  // faces turned to the part (normals +Z and -Y) with the distance signedDistance gives.
+  const Sweep s(AptCutter::flat(6.0, 30.0), lyingAlongY({10, 5, -1}, {10, 3, -1}), 0.1);
+  const Eigen::Vector3d q(10, 2.9, 2.05);
+  Eigen::Vector3d normals[2];
+  double distances[2];
+  int count = 0;
+  const double d = s.localFaces(q, 0.3, normals, distances, count);
+  CHECK(d == Approx(std::hypot(0.05, 0.1)).margin(1e-9));
+  CHECK(d == Approx(s.signedDistance(q)).margin(1e-9));
+  REQUIRE(count == 2);
+  const bool sideFirst = std::abs(normals[0].z()) > 0.5;
+  const Eigen::Vector3d side = normals[sideFirst ? 0 : 1], end = normals[sideFirst ? 1 : 0];
+  CHECK((side - Eigen::Vector3d(0, 0, 1)).norm() < 1e-9);
+  CHECK((end - Eigen::Vector3d(0, -1, 0)).norm() < 1e-9);
+  CHECK(distances[sideFirst ? 0 : 1] == Approx(0.05).margin(1e-9));
+  CHECK(distances[sideFirst ? 1 : 0] == Approx(0.1).margin(1e-9));
 }
 
 TEST_CASE("a ball end mill turned about its centre sweeps the ball", "[cutters]") {

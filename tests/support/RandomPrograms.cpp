@@ -4,6 +4,8 @@
 #include "engine/gcode/GcodeReader.h"
 #include "engine/run/Resolution.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -452,6 +454,46 @@ RandomCase randomCase(std::uint64_t seed, int maxMoves) {
   c.path = std::move(path);
   c.name = std::string(title).substr(0, std::string(title).find(';'));
   return c;
+}
+
+TiltedCase tiltedCase(const RandomCase& c, Tilt tilt) {
+  Draw d(c.seed ^ 0x5EEDu);
+  TiltedCase t;
+  t.abc = {d.u(10.0, 60.0), 0.0, d.u(0.0, 360.0)};
+  if (tilt == Tilt::Quarter) t.abc = {90.0, 0.0, 90.0 * d.i(0, 3)};
+  if (tilt == Tilt::Upright) t.abc.setZero();
+  t.path = c.path;
+  t.path.kinematics.type = Kinematics::Type::TableAC;
+  t.path.kinematics.tcp = true;
+  const Eigen::Matrix3d q =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), t.path.kinematics.axis(t.abc))
+          .toRotationMatrix();
+  for (Move& m : t.path.moves) {
+    m.start = q * m.start;
+    m.end = q * m.end;
+    m.center = q * m.center;
+    m.rotaryStart = m.rotaryEnd = t.abc;
+  }
+  // The box's corners (bit i of k: the max in axis i), turned, and its faces outwards.
+  t.box.min = Eigen::Vector3d::Constant(1e300);
+  t.box.max = Eigen::Vector3d::Constant(-1e300);
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d p((k & 1) ? c.stock.max.x() : c.stock.min.x(),
+                            (k & 2) ? c.stock.max.y() : c.stock.min.y(),
+                            (k & 4) ? c.stock.max.z() : c.stock.min.z());
+    const Eigen::Vector3d r = q * p;
+    t.box.min = t.box.min.cwiseMin(r);
+    t.box.max = t.box.max.cwiseMax(r);
+    t.stock.points.push_back(
+        {static_cast<float>(r.x()), static_cast<float>(r.y()), static_cast<float>(r.z())});
+  }
+  const unsigned faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    t.stock.triangles.push_back({f[0], f[1], f[2]});
+    t.stock.triangles.push_back({f[0], f[2], f[3]});
+  }
+  return t;
 }
 
 double MoveComparison::totalPct() const {

@@ -12,6 +12,7 @@
 
 #include "cutters/AptCutter.h"
 #include "engine/gcode/Toolpath.h"
+#include "stock/TriangleMesh.h"
 
 #include <cmath>
 #include <cstdint>
@@ -33,6 +34,24 @@ struct RandomCase {
 /// The case of `seed`. At most `maxMoves` feed and rapid moves (the exact reference's time
 /// grows with them; a ball's hull is 20 times a flat's).
 RandomCase randomCase(std::uint64_t seed, int maxMoves = 30);
+
+/// A case carried onto a tilted tool (issue 48): a table-ac machine holding the tip (tcp,
+/// xyzac-trt-kins) at A and C, held through the program, and the program and the stock turned
+/// by the rotation that takes +Z to the tool's axis there. A rotation keeps volumes: the case's
+/// exact removals are the upright case's.
+enum class Tilt {
+  Oblique,  ///< A 10-60 deg, C any, drawn from the seed: the box's faces oblique to the grid
+  Quarter,  ///< A 90 deg, C a multiple of 90 from the seed: the tool lies along X or Y and the
+            ///< turned box is a box again
+  Upright   ///< A and C 0, nothing turned (the same box as a mesh: a control)
+};
+struct TiltedCase {
+  Toolpath path;       ///< the moves' tips turned, each at (A, 0, C)
+  TriangleMesh stock;  ///< the box turned (12 triangles)
+  Box3 box;            ///< its bounds: the stock itself for Tilt::Quarter and Tilt::Upright
+  Eigen::Vector3d abc{0.0, 0.0, 0.0};  ///< degrees
+};
+TiltedCase tiltedCase(const RandomCase& c, Tilt tilt = Tilt::Oblique);
 
 /// How a stock model's per-move removal compares with the exact one, on issue 44's bounds:
 /// the total within 0.1 %; every move of 1 mm^3 or more within 1 %; smaller moves within two
