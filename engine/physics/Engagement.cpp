@@ -587,19 +587,26 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     }
     return 0.5 * (in + air);
   };
+  // Slice k's contact followed from its middle towards `air` (then `further`, where the first
+  // is in material at an angle), at the angles of widestAngles: the furthest end found (NaN:
+  // none).
+  auto furthest = [&](std::size_t k, const EdgeSlice& s, double air, double further) {
+    double end = kNaN;
+    for (const double phi : widestAngles(s)) {
+      double e = bisect(k, s.z, air, phi);
+      if (std::isnan(e) && !std::isnan(further)) e = bisect(k, s.z, further, phi);
+      if (!std::isnan(e) && (std::isnan(end) || std::abs(e - s.z) > std::abs(end - s.z))) end = e;
+    }
+    return end;
+  };
   {
     EdgeSlice& top = out.slices.back();
     const bool last = kept.back() + 1 == slices.size();
     const double bottom = top.z - 0.5 * top.dz;
-    double end = kNaN;
-    for (const double phi : widestAngles(top)) {
-      // Up to the next slice's middle, or the one after where the next's contact at this
-      // angle was too short to keep.
-      double e = bisect(kept.back(), top.z, last ? zTop : top.z + top.dz, phi);
-      if (std::isnan(e) && !last)
-        e = bisect(kept.back(), top.z, std::min(zTop, top.z + 2.0 * top.dz), phi);
-      if (!std::isnan(e) && !(e <= end)) end = e;  // (the highest)
-    }
+    // Up to the next slice's middle, or the one after where the next's contact at an angle
+    // was too short to keep.
+    const double end = furthest(kept.back(), top, last ? zTop : top.z + top.dz,
+                                last ? kNaN : std::min(zTop, top.z + 2.0 * top.dz));
     if (!std::isnan(end)) {
       top.dz = end - bottom;
       top.z = 0.5 * (bottom + end);
@@ -610,13 +617,8 @@ EdgeEngagement measureEngagement(const Stock& stock, const AptCutter& cutter,
     EdgeSlice& low = out.slices.front();
     const double top = low.z + 0.5 * low.dz;
     if (kept.front() > 0 && low.z - low.dz > 0.0) {
-      double end = kNaN;
-      for (const double phi : widestAngles(low)) {
-        double e = bisect(kept.front(), low.z, low.z - low.dz, phi);
-        if (std::isnan(e) && low.z - 2.0 * low.dz > 0.0)
-          e = bisect(kept.front(), low.z, low.z - 2.0 * low.dz, phi);
-        if (!std::isnan(e) && !(e >= end)) end = e;  // (the lowest)
-      }
+      const double end = furthest(kept.front(), low, low.z - low.dz,
+                                  low.z - 2.0 * low.dz > 0.0 ? low.z - 2.0 * low.dz : kNaN);
       if (!std::isnan(end)) {
         low.dz = top - end;
         low.z = 0.5 * (top + end);
