@@ -79,8 +79,18 @@ int gGroup(int g) {
     case G_43:
     case G_43_1:
     case G_43_2:
+    case G_43_4:
     case G_49:
+    case G_234:
       return 8;
+    case G_68_2:
+    case G_69:
+      return 16;
+    case G_254:
+    case G_255:
+      return 23;
+    case G_53_1:
+      return 24;  // (non-modal, but it takes no axis words: not group 0)
     case G_98:
     case G_99:
       return 10;

@@ -48,9 +48,11 @@ enum GCode : int {
   G_43 = 430,
   G_43_1 = 431,
   G_43_2 = 432,
+  G_43_4 = 434,  ///< Fanuc: tool centre point control on (with H, as G43)
   G_49 = 490,
   G_52 = 520,
   G_53 = 530,
+  G_53_1 = 531,  ///< Fanuc: turn the rotary axes to the tilted work plane's Z
   G_54 = 540,
   G_55 = 550,
   G_56 = 560,
@@ -63,7 +65,9 @@ enum GCode : int {
   G_61 = 610,
   G_61_1 = 611,
   G_64 = 640,
-  G_65 = 650,  ///< Fanuc/Haas macro call: run by the interpreter's loop, not a modal group
+  G_65 = 650,    ///< Fanuc/Haas macro call: run by the interpreter's loop, not a modal group
+  G_68_2 = 682,  ///< Fanuc: tilted work plane X Y Z (origin) I J K (Euler angles Z, X', Z'')
+  G_69 = 690,
   G_70 = 700,
   G_71 = 710,
   G_71_1 = 711,
@@ -98,6 +102,9 @@ enum GCode : int {
   G_97 = 970,
   G_98 = 980,
   G_99 = 990,
+  G_234 = 2340,  ///< Haas: tool centre point control (TCPC, with H, as G43)
+  G_254 = 2540,  ///< Haas: dynamic work offset (DWO)
+  G_255 = 2550,  ///< Haas: DWO off
 };
 
 /// M codes (number x 10).

@@ -86,6 +86,7 @@ Interpreter::Interpreter(const ReaderOptions& options) : options_(options) {
   tool_ = preparedTool_ = options.startTool;
   startKnown_ = options.startKnown;
   if (options.machine) out_.kinematics = options.machine->kinematics;
+  tipHeld_ = machineTcp();
   if (const auto& m = options.machine) {
     // The interpreter runs in the machine's coordinates (mm at the start); run() moves the
     // result into G54's frame.
@@ -121,8 +122,13 @@ Toolpath Interpreter::run(std::unique_ptr<SourceFile> main) {
 void Interpreter::toWorkFrame(const MachineSetup& m) {
   for (const Move& move : out_.moves) {
     if (!m.limited) break;
+    // The travel limits are the joints'.
+    Vector3d joints = move.end;
+    if (move.frame != 0) joints = out_.frames[move.frame - 1].toWork(joints);
+    if (move.tipHeld && m.kinematics.rotary())
+      joints = m.kinematics.joints(joints - m.workOffset, move.rotaryEnd) + m.workOffset;
     for (int a = 0; a < 3; ++a) {
-      const double v = move.end[a];
+      const double v = joints[a];
       if (v >= m.travelMin[a] - 1e-6 && v <= m.travelMax[a] + 1e-6) continue;
       auto mm = [](double x) { return formatNumber(x) + " mm"; };
       throw GcodeError(out_.files[static_cast<std::size_t>(move.file)], move.line, 1,
@@ -132,6 +138,9 @@ void Interpreter::toWorkFrame(const MachineSetup& m) {
                            std::string(1, static_cast<char>('X' + a)) + " " + mm(v));
     }
   }
+  // A plane's map of stored to work coordinates, both shifted: origin + turn * w0 - w0.
+  for (FeatureFrame& f : out_.frames)
+    f.origin += f.turn * m.workOffset - m.workOffset;
   for (Move& move : out_.moves) {
     move.start -= m.workOffset;
     move.end -= m.workOffset;
@@ -656,7 +665,7 @@ void Interpreter::modes(Words& w) {
   if (const auto g = w.gIn(8)) {
     // The spindle stays where it is: a longer tool puts the tip lower.
     const double previousLength = toolLength_;
-    if (*g == G_43) {
+    if (*g == G_43 || *g == G_43_4 || *g == G_234) {
       const int h = w.has('H') ? static_cast<int>(std::lround(w.get('H'))) : tool_;
       const auto it = toolLengths_.find(h);
       toolLength_ = it == toolLengths_.end() ? 0.0 : it->second;  // mm
@@ -689,6 +698,7 @@ void Interpreter::modes(Words& w) {
   if (const auto g = w.gIn(3)) incremental_ = *g == G_91;
   if (const auto g = w.gIn(4)) arcIncremental_ = *g == G_91_1;
   if (const auto g = w.gIn(10)) retractToR_ = *g == G_99;
+  tipModes(w);
 }
 
 bool Interpreter::executeBlock(const Block& b) {
@@ -729,6 +739,10 @@ bool Interpreter::executeBlock(const Block& b) {
     double& at = otherAxisPosition_[std::string_view("ABCUVW").find(axis)];
     const double to = incremental_ ? at + w.get(axis) : w.get(axis);
     if (to != at) otherAxes_ = true;
+    if (to != at && axis <= 'C' && dwo_)
+      fail(w.column(axis), std::string("expected G255 (the dynamic work offset off) before ") +
+                               "rotary motion, found " + axis + formatNumber(to) +
+                               " with G254 in force");
     if (to != at && axis <= 'C' && options_.machine && options_.machine->kinematics.rotary() &&
         options_.machine->kinematics.rotaryAxes().find(axis) == std::string::npos) {
       std::string letters;
@@ -743,16 +757,21 @@ bool Interpreter::executeBlock(const Block& b) {
   if (g0 && motionWord && axes && (*g0 == G_10 || *g0 == G_28 || *g0 == G_30 || *g0 == G_92))
     fail(w.gColumn(*g0), "expected either " + codeName('G', *g0) +
                              " or a motion on this line, found both using the axis words");
+  // Machine coordinates are the joints' (Haas: G53, G28 and G30 ignore G254): TCP lets go of
+  // the tip for them.
+  const bool machineCoords = w.hasG(G_53);
+  const bool jointMove =
+      tipHeld_ && !machineTcp() && (machineCoords || (g0 && (*g0 == G_28 || *g0 == G_30)));
+  if (jointMove) holdTip(false);
   if (g0) nonModal(*g0, w);
 
   // Motion.
   motionBefore_ = motion_;
   if (motionWord) motion_ = *motionWord;
-  const bool machineCoords = w.hasG(G_53);
   if (machineCoords && !(motion_ == G_0 || motion_ == G_1))
     fail(w.gColumn(G_53),
          "expected G0 or G1 with G53, found " + codeName('G', motion_) + " active");
-  const bool axesForMotion = axes && !w.hasG(G_43_1) &&
+  const bool axesForMotion = axes && !w.hasG(G_43_1) && !w.hasG(G_68_2) &&
                              !(g0 && (*g0 == G_10 || *g0 == G_28 || *g0 == G_30 || *g0 == G_92));
   const bool cycleMode = motion_ == G_73 || (motion_ >= G_81 && motion_ <= G_89);
   if (!cycleMode) cycleInitialValid_ = false;
@@ -771,6 +790,7 @@ bool Interpreter::executeBlock(const Block& b) {
   } else if (motionWord && *motionWord == G_5_2 && (w.has('P') || w.has('L'))) {
     motion(w, true, false);  // G5.2 opening a NURBS block without axis words
   }
+  if (jointMove) holdTip(true);
 
   // Stop codes, and M98/M99 subprograms (LinuxCNC 2.9, Fanuc and Haas posts), last.
   for (const auto& [code, c] : w.m)
@@ -937,8 +957,9 @@ Move Interpreter::base(MoveKind kind) const {
   m.block = recordBlock();
   m.otherAxes = otherAxes_;
   m.rotaryStart = out_.moves.empty() ? Eigen::Vector3d::Zero() : out_.moves.back().rotaryEnd;
-  m.rotaryEnd =
-      Eigen::Vector3d(otherAxisPosition_[0], otherAxisPosition_[1], otherAxisPosition_[2]);
+  m.rotaryEnd = rotaryNow();
+  m.tipHeld = tipHeld_;
+  m.frame = frame_;
   return m;
 }
 

@@ -220,6 +220,23 @@ class Interpreter final : public gcode::ParameterSource {
   void refuseUnsupported(const Words& w) const;
   void feedSpindleAndTool(const Words& w);
   void modes(Words& w);
+  /// Tool centre point control (G43.4, G234, G49), Haas's dynamic work offset (G254, G255) and
+  /// Fanuc's tilted work plane (G68.2, G53.1, G69): whether X, Y, Z are the tip on the part,
+  /// and in which frame.
+  void tipModes(const Words& w);
+  /// pos_ turned into the tip on the part (`held`) or the joints that put it there, at the
+  /// current angles, and tipHeld_ set: a controller switching TCP on reads its position back.
+  void holdTip(bool held);
+  /// Whether the modes in force make X, Y, Z the tip on the part.
+  bool tipWanted() const { return machineTcp() || tcpCode_ || dwo_ || frame_ != 0; }
+  bool machineTcp() const { return options_.machine && options_.machine->kinematics.tcp; }
+  /// The rotary axes A, B, C now, degrees.
+  Vector3d rotaryNow() const {
+    return {otherAxisPosition_[0], otherAxisPosition_[1], otherAxisPosition_[2]};
+  }
+  /// G53.1: the rotary axes turned (a rapid, the joints still) so the tool points along the
+  /// tilted plane's Z.
+  void alignToPlane(int column);
 
   /// M98 P<program> [L<times>]: runs O<program> (in this program, or <program>.ngc beside
   /// it) until its M99, L times. With --dialect fanuc and no L, a P of more than four digits
@@ -431,7 +448,11 @@ class Interpreter final : public gcode::ParameterSource {
   int tool_ = 0;
   int preparedTool_ = 0;
   double toolLength_ = 0.0;
-  bool otherAxes_ = false;                     ///< the current line moves a rotary or UVW axis
+  bool tcpCode_ = false;     ///< G43.4 or G234 in force (until G43, G43.1, G49)
+  bool dwo_ = false;         ///< G254 in force (until G255)
+  std::uint32_t frame_ = 0;  ///< the tilted work plane in force: 1 + index in out_.frames
+  bool tipHeld_ = false;     ///< pos_ is the tip on the part, not the joints (Move::tipHeld)
+  bool otherAxes_ = false;   ///< the current line moves a rotary or UVW axis
   std::array<double, 6> otherAxisPosition_{};  ///< A, B, C, U, V, W (program units)
   int motion_ = G_80;        ///< G80: axis words need a motion word first, as in LinuxCNC
   int motionBefore_ = G_80;  ///< motion mode before the current block

@@ -45,6 +45,14 @@ const char* moveKindName(MoveKind kind);
 /// "XY", "XZ", "YZ".
 const char* planeName(Plane plane);
 
+/// A tilted work plane (Fanuc G68.2): a move under it keeps its coordinates as programmed (in
+/// the plane's frame, plus the work offset); the work frame's are `origin + turn * xyz` (mm).
+struct FeatureFrame {
+  Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d origin{0.0, 0.0, 0.0};
+  Eigen::Vector3d toWork(const Eigen::Vector3d& xyz) const { return origin + turn * xyz; }
+};
+
 /// One interpreted move.
 struct Move {
   MoveKind kind = MoveKind::Line;
@@ -70,6 +78,12 @@ struct Move {
   /// turn the tool relative to the part by them: engine/kinematics/Kinematics.h).
   Eigen::Vector3d rotaryStart{0.0, 0.0, 0.0};
   Eigen::Vector3d rotaryEnd{0.0, 0.0, 0.0};
+  /// X, Y, Z are the tool tip on the part (tool centre point control: Fanuc G43.4, Haas G234,
+  /// Haas G254, a tilted work plane), not the machine's joints; see Kinematics.h.
+  bool tipHeld = false;
+  /// The tilted work plane the move was programmed in: 1 + its index in Toolpath::frames, 0
+  /// for none.
+  std::uint32_t frame = 0;
   /// Spindle and Probe feeds are not the schedule's to change (see fixedFeed()).
   FeedSource feedSource = FeedSource::Word;
   /// Spindle-synchronised motion and probing: a feed schedule must leave the feed as it is.
@@ -137,6 +151,12 @@ struct Toolpath {
   /// The machine's kinematic chain (its machine file's): how the moves' rotary axes turn the
   /// tool relative to the part.
   Kinematics kinematics;
+  /// The tilted work planes the moves refer to (Move::frame).
+  std::vector<FeatureFrame> frames;
+  /// Move `m`'s tilted work plane, or nullptr.
+  const FeatureFrame* frameOf(const Move& m) const {
+    return m.frame == 0 ? nullptr : &frames[m.frame - 1];
+  }
 };
 
 /// Arcs: radius in the plane, mm.

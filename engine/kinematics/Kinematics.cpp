@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 
 namespace engage {
@@ -96,7 +97,8 @@ Eigen::Vector3d Kinematics::axis(const Eigen::Vector3d& abc) const {
   return tableRotation(abc).transpose() * headAxis(abc);
 }
 
-ToolPose Kinematics::pose(const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc) const {
+ToolPose Kinematics::pose(const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc,
+                          bool tipHeld) const {
   // The head's turn of the tool in the machine frame, and the tip's offset from where it is
   // with the head upright (the pivot stays pivotLength above that point).
   const Eigen::Vector3d axis = headAxis(abc);
@@ -104,7 +106,7 @@ ToolPose Kinematics::pose(const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc
   const Eigen::Matrix3d toPart = tableRotation(abc).transpose();
   ToolPose pose;
   pose.axis = toPart * axis;
-  if (tcp) {
+  if (tipHeld) {
     pose.tip = xyz;
     return pose;
   }
@@ -131,6 +133,55 @@ ToolPose Kinematics::pose(const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc
     }
   }
   return pose;
+}
+
+Eigen::Vector3d Kinematics::joints(const Eigen::Vector3d& tip, const Eigen::Vector3d& abc) const {
+  // The joints carry the tip rigidly: tip = toPart * xyz + pose(0).tip.
+  const Eigen::Vector3d at0 = pose(Eigen::Vector3d::Zero(), abc, false).tip;
+  return tableRotation(abc) * (tip - at0);
+}
+
+std::optional<Eigen::Vector3d> Kinematics::anglesFor(const Eigen::Vector3d& want,
+                                                     const Eigen::Vector3d& near) const {
+  // Every chain here tilts the tool by one angle (its axis's Z is the tilt's cosine) and spins
+  // the tilted axis about Z by the other: both tilts, each with the spin that brings the axis
+  // round to `want`, checked through axis() itself.
+  const std::string letters = rotaryAxes();
+  if (letters.empty()) {
+    if ((want - Eigen::Vector3d::UnitZ()).norm() <= 1e-9) return near;
+    return std::nullopt;
+  }
+  const int tilt = letters[0] - 'A';
+  const int spin = letters.size() > 1 ? letters[1] - 'A' : -1;
+  const double tiltDeg = std::acos(std::clamp(want.z(), -1.0, 1.0)) * 180.0 / kPi;
+  std::optional<Eigen::Vector3d> best;
+  double bestCost = 0.0;
+  for (const double sign : {1.0, -1.0}) {
+    Eigen::Vector3d abc = near;
+    abc[tilt] = sign * tiltDeg;
+    if (spin >= 0) {
+      Eigen::Vector3d at0 = abc;
+      at0[spin] = 0.0;
+      const Eigen::Vector3d v = axis(at0);
+      if (std::hypot(v.x(), v.y()) > 1e-12 && std::hypot(want.x(), want.y()) > 1e-12) {
+        const double turn =
+            (std::atan2(want.y(), want.x()) - std::atan2(v.y(), v.x())) * 180.0 / kPi;
+        // The spin's sense differs between chains: the one that lands on `want`.
+        for (const double s : {1.0, -1.0}) {
+          abc[spin] = s * turn;
+          if ((axis(abc) - want).norm() <= 1e-9) break;
+        }
+        abc[spin] += 360.0 * std::round((near[spin] - abc[spin]) / 360.0);
+      }
+    }
+    if ((axis(abc) - want).norm() > 1e-9) continue;
+    const double cost = (abc - near).cwiseAbs().sum();
+    if (!best || cost < bestCost - 1e-9) {
+      best = abc;
+      bestCost = cost;
+    }
+  }
+  return best;
 }
 
 }  // namespace engage

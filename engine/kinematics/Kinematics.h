@@ -29,6 +29,7 @@
 
 #include <Eigen/Core>
 
+#include <optional>
 #include <string>
 
 namespace engage {
@@ -57,7 +58,20 @@ struct Kinematics {
   /// Whether the chain turns the tool relative to the part at all (not Trivial).
   bool rotary() const { return type != Type::Trivial; }
   /// The tool's pose for axis positions `xyz` (mm) and `abc` (degrees).
-  ToolPose pose(const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc) const;
+  ToolPose pose(const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc) const {
+    return pose(xyz, abc, tcp);
+  }
+  /// The same with the controller holding the tip (`tipHeld`: X, Y, Z are the tip in the part
+  /// frame) or not, whatever `tcp` says: a program switches it (G43.4, G234, G254, G68.2).
+  ToolPose pose(const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc, bool tipHeld) const;
+  /// The joints X, Y, Z (mm) that put the tip at `tip` (mm, part frame) at angles `abc`: the
+  /// inverse of pose(xyz, abc, false).tip.
+  Eigen::Vector3d joints(const Eigen::Vector3d& tip, const Eigen::Vector3d& abc) const;
+  /// Angles A, B, C (degrees) that turn the tool's axis to `axis` (unit, part frame), of the
+  /// two solutions the one nearest `near` (C taken to the turn nearest near's); nullopt where
+  /// this chain cannot point the tool that way (a 4th axis off its plane).
+  std::optional<Eigen::Vector3d> anglesFor(const Eigen::Vector3d& axis,
+                                           const Eigen::Vector3d& near) const;
   /// The tool's axis on the part for angles `abc` (degrees): pose(xyz, abc).axis for any xyz.
   Eigen::Vector3d axis(const Eigen::Vector3d& abc) const;
   /// The rotation that takes the part frame to the machine's (a table's turn; the identity for

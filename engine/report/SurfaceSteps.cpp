@@ -117,8 +117,7 @@ std::vector<int> lastCuttingSteps(const std::vector<std::array<float, 3>>& point
             const StepRecord& s = steps[i];
             if (!(s.removed > minRemoved)) continue;
             const Move& m = path.moves[s.move];
-            const Sweep sweep(cutters.of(m.tool), stepPath(m, s.t0, s.t1, path.kinematics),
-                              resolution);
+            const Sweep sweep(cutters.of(m.tool), stepPath(m, s.t0, s.t1, path), resolution);
             Box3 box = sweep.bounds();
             box.min -= Eigen::Vector3d::Constant(tolerance);
             box.max += Eigen::Vector3d::Constant(tolerance);

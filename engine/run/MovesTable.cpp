@@ -1,13 +1,17 @@
 #include "engine/run/MovesTable.h"
 
+#include "engine/sim/ToolPoses.h"
+
 #include <cstdio>
 
 namespace engage {
 
 std::string movesTable(const Toolpath& path) {
-  const bool rotary = path.kinematics.rotary();
-  std::string out = rotary ? "line,kind,x,y,z,a_deg,b_deg,c_deg,cx,cy,cz,plane,turns,feed_mm_min,"
-                             "minutes\n"
+  // A rotary machine's moves, and a tilted work plane's, say where the tool is on the part
+  // apart from their words.
+  const bool rotary = path.kinematics.rotary() || !path.frames.empty();
+  std::string out = rotary ? "line,kind,x,y,z,a_deg,b_deg,c_deg,tip_x,tip_y,tip_z,axis_i,axis_j,"
+                             "axis_k,cx,cy,cz,plane,turns,feed_mm_min,minutes\n"
                            : "line,kind,x,y,z,cx,cy,cz,plane,turns,feed_mm_min\n";
   char buf[256];
   auto row = [&](const Move& m, const Eigen::Vector3d& p) {
@@ -17,6 +21,10 @@ std::string movesTable(const Toolpath& path) {
     if (rotary) {
       std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,", m.rotaryEnd.x(), m.rotaryEnd.y(),
                     m.rotaryEnd.z());
+      out += buf;
+      const ToolPose pose = movePose(m, path.kinematics, path.frameOf(m), p, m.rotaryEnd);
+      std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,", pose.tip.x(), pose.tip.y(),
+                    pose.tip.z(), pose.axis.x(), pose.axis.y(), pose.axis.z());
       out += buf;
     }
     if (m.kind == MoveKind::Arc) {

@@ -51,7 +51,8 @@ std::unique_ptr<Stock> makeStock(const Job& job, StockModel model, double h) {
 void checkReach(const Job& job, const Stock& stock) {
   if (job.path.moves.empty())
     throw ParameterError(job.program + ": the program makes no moves: nothing to simulate");
-  if (job.path.kinematics.rotary()) return;  // (the moves' X, Y, Z are not on the part)
+  // (The moves' X, Y, Z are not on the part.)
+  if (job.path.kinematics.rotary() || !job.path.frames.empty()) return;
   const Box3 sb = stock.bounds();
   for (const Move& m : job.path.moves) {
     const AptCutter& cutter = job.cutters.of(m.tool);

@@ -71,8 +71,9 @@ ProgramEngagement programEngagement(const Toolpath& path, const CutterSet& cutte
 }
 
 std::vector<Box3> programReach(const Toolpath& path, const CutterSet& cutters, const Box3& stock) {
-  // (Rotary kinematics carry the tool anywhere about the part: all of it.)
-  if (path.kinematics.rotary()) return {stock};
+  // (Rotary kinematics carry the tool anywhere about the part, and a tilted work plane's moves
+  // are not in the part's frame: all of it.)
+  if (path.kinematics.rotary() || !path.frames.empty()) return {stock};
   std::vector<Box3> reach;
   const double top = stock.max.z();
   for (const Move& m : path.moves) {

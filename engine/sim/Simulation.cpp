@@ -587,7 +587,7 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       const Planned& p = plan[si];
       const Move& m = path.moves[p.move];
       Pending& b = batch.emplace_back();
-      b.sp = stepPath(m, p.t0, p.t1, path.kinematics);
+      b.sp = stepPath(m, p.t0, p.t1, path);
       b.r = plannedRecord(p, m, b.sp, arc);
       const AptCutter& cutter = cutters.of(m.tool);
       StepCut c{nullptr, static_cast<int>(si), b.r.dt, {}};
@@ -595,9 +595,11 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
       // starts: a tool put down in the stock is measured).
       for (; visitedUpTo < p.move; ++visitedUpTo) {
         const Move& done = path.moves[visitedUpTo];
-        if (path.kinematics.rotary())
-          visited.add(done.tool, path.kinematics.pose(done.end, done.rotaryEnd).tip,
-                      path.kinematics.axis(done.rotaryEnd));
+        if (path.kinematics.rotary() || done.frame != 0)
+          visited.add(
+              done.tool,
+              movePose(done, path.kinematics, path.frameOf(done), done.end, done.rotaryEnd).tip,
+              path.kinematics.axis(done.rotaryEnd));
         else
           visited.add(done.tool, done.end, Eigen::Vector3d::UnitZ());
       }
@@ -728,7 +730,7 @@ SimulationResult analyticSteps(const Toolpath& path, const CutterSet& cutters,
   for (const Planned& p : planSteps(path, cutters, L, options.maxSteps)) {
     if (stopRequested()) throw Interrupted();
     const Move& m = path.moves[p.move];
-    const StepPath sp = stepPath(m, p.t0, p.t1, path.kinematics);
+    const StepPath sp = stepPath(m, p.t0, p.t1, path);
     StepRecord r = plannedRecord(p, m, sp, arc);
     const AptCutter& cutter = cutters.of(m.tool);
     const double d = std::min(*options.depth, cutter.height());

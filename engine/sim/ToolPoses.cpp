@@ -52,25 +52,37 @@ bool tiltsTool(const Toolpath& path) {
                      [&](const Move& m) { return tiltsTool(m, path.kinematics); });
 }
 
-StepPath stepPath(const Move& m, double t0, double t1, const Kinematics& k) {
+ToolPose movePose(const Move& m, const Kinematics& k, const FeatureFrame* frame,
+                  const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc) {
+  return k.pose(frame ? frame->toWork(xyz) : xyz, abc, k.tcp || m.tipHeld);
+}
+
+StepPath stepPath(const Move& m, double t0, double t1, const Toolpath& path) {
+  return stepPath(m, t0, t1, path.kinematics, path.frameOf(m));
+}
+
+StepPath stepPath(const Move& m, double t0, double t1, const Kinematics& k,
+                  const FeatureFrame* frame) {
   StepPath p = workPath(m, t0, t1);
-  if (!k.rotary()) return p;
+  if (!k.rotary() && !frame) return p;
   auto tipAt = [&](const Eigen::Vector3d& xyz, double t) {
-    return k.pose(xyz, rotaryAt(m, t)).tip;
+    return movePose(m, k, frame, xyz, rotaryAt(m, t)).tip;
   };
   if (!turnsRotary(m)) {
-    // The kinematics carry the whole move rigidly (a rotation and a shift).
+    // The kinematics and the tilted plane carry the whole move rigidly (a turn and a shift).
     const Eigen::Vector3d axis = k.axis(m.rotaryStart);
     p.axisStart = p.axisEnd = axis;
     const bool upright = (axis - Eigen::Vector3d::UnitZ()).squaredNorm() <= 1e-24;
-    if (p.kind == StepPath::Kind::ArcXY && !upright) {
-      // An XY arc with the tool tilted: a polyline.
+    const Eigen::Vector3d z = tipAt(p.start + Eigen::Vector3d::UnitZ(), t0) - tipAt(p.start, t0);
+    const bool keepsZ = (z - Eigen::Vector3d::UnitZ()).squaredNorm() <= 1e-24;
+    if (p.kind == StepPath::Kind::ArcXY && !(upright && keepsZ)) {
+      // An XY arc with the tool tilted, or on a tilted plane: a polyline.
       p.kind = StepPath::Kind::Polyline;
       for (int i = 0; i <= kPieces; ++i)
         p.points.push_back(pointAt(m, t0 + (t1 - t0) * i / kPieces));
     }
-    // (With the tool upright the carrying rotation is about Z: an XY arc stays an XY arc, its
-    // centre carried like a tip at its height.)
+    // (Where the carrying turn is about Z an XY arc stays an XY arc, its centre carried like a
+    // tip at its height.)
     p.start = tipAt(p.start, t0);
     p.end = tipAt(p.end, t1);
     p.center = tipAt(p.center, t0);
@@ -84,7 +96,7 @@ StepPath stepPath(const Move& m, double t0, double t1, const Kinematics& k) {
   q.kind = StepPath::Kind::Polyline;
   for (int i = 0; i <= kPieces; ++i) {
     const double t = t0 + (t1 - t0) * i / kPieces;
-    const ToolPose pose = k.pose(pointAt(m, t), rotaryAt(m, t));
+    const ToolPose pose = movePose(m, k, frame, pointAt(m, t), rotaryAt(m, t));
     q.points.push_back(pose.tip);
     if (i == 0) q.axisStart = pose.axis;
     if (i == kPieces) q.axisEnd = pose.axis;
@@ -97,13 +109,14 @@ StepPath stepPath(const Move& m, double t0, double t1, const Kinematics& k) {
 double moveTravel(const Move& m, const Kinematics& k, double reach) {
   const double length = moveLength(m);
   if (!k.rotary() || !turnsRotary(m)) return length;  // (carried rigidly where they hold)
-  // Pieces of the move: the tip's travel plus the reach times the axis's turn, summed.
+  // Pieces of the move: the tip's travel plus the reach times the axis's turn, summed (a
+  // tilted plane turns the tip's path rigidly: it changes no length).
   constexpr int kSamples = 32;
   double travel = 0.0;
-  ToolPose before = k.pose(pointAt(m, 0.0), rotaryAt(m, 0.0));
+  ToolPose before = movePose(m, k, nullptr, pointAt(m, 0.0), rotaryAt(m, 0.0));
   for (int i = 1; i <= kSamples; ++i) {
     const double t = static_cast<double>(i) / kSamples;
-    const ToolPose now = k.pose(pointAt(m, t), rotaryAt(m, t));
+    const ToolPose now = movePose(m, k, nullptr, pointAt(m, t), rotaryAt(m, t));
     const double turn = std::acos(std::clamp(before.axis.dot(now.axis), -1.0, 1.0));
     travel += (now.tip - before.tip).norm() + reach * turn;
     before = now;

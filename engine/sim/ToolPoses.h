@@ -21,10 +21,19 @@ bool turnsRotary(const Move& m);
 /// The tip path of move `m` between fractions t0 and t1 of it, in the part's frame, with the
 /// tool's axis at both ends: for a machine without rotary kinematics the move's own path (a
 /// line, an XY arc or helix, or a polyline of 8 pieces for other arcs and splines); where the
-/// rotary axes hold still, that path carried by the kinematics (an XY arc stays one while the
-/// tool stays vertical, else a polyline of 8 pieces); where they turn, the tip at 8 pieces'
-/// ends.
-StepPath stepPath(const Move& m, double t0, double t1, const Kinematics& k = {});
+/// rotary axes hold still, that path carried by the kinematics and the move's tilted work plane
+/// (an XY arc stays one while the tool stays vertical and the plane level, else a polyline of
+/// 8 pieces); where they turn, the tip at 8 pieces' ends.
+StepPath stepPath(const Move& m, double t0, double t1, const Kinematics& k = {},
+                  const FeatureFrame* frame = nullptr);
+/// The same for a move of `path` (its kinematics and the move's tilted work plane).
+StepPath stepPath(const Move& m, double t0, double t1, const Toolpath& path);
+
+/// The tool's pose at move `m`'s axis positions `xyz` (the move's coordinates, mm) and `abc`
+/// (degrees) in the part's frame: through its tilted work plane `frame` (if any) and the
+/// kinematics, with the tip held where the machine or the move says so.
+ToolPose movePose(const Move& m, const Kinematics& k, const FeatureFrame* frame,
+                  const Eigen::Vector3d& xyz, const Eigen::Vector3d& abc);
 
 /// How far any point of a tool reaching `reach` mm from its tip (the hypotenuse of its radius
 /// and height) travels over move `m` in the part's frame, at most (mm): the move's length where

@@ -209,3 +209,41 @@ TEST_CASE("a trivial machine keeps the tool vertical, and kinematics types go by
   ac.type = Kinematics::Type::TableAC;
   CHECK(ac.rotaryAxes() == "AC");
 }
+
+TEST_CASE("the joints for a tip, and the angles for an axis, undo the pose", "[kinematics]") {
+  // Random poses on every chain: joints(tip) puts the tip back where it was; anglesFor(axis)
+  // points the tool the same way (checked through the forward map, which the tests above hold
+  // to LinuxCNC's equations), the one of its two solutions nearer the given angles.
+  std::mt19937 rng(48);
+  std::uniform_real_distribution<double> u(-50.0, 50.0), angle(-80.0, 80.0);
+  for (const auto type :
+       {Kinematics::Type::TableA, Kinematics::Type::TableB, Kinematics::Type::TableAC,
+        Kinematics::Type::TableBC, Kinematics::Type::HeadBC, Kinematics::Type::HeadBTableC}) {
+    Kinematics k;
+    k.type = type;
+    k.rotPoint = {3.0, -4.0, -20.0};
+    k.offset = {2.0, 1.5, 15.0};
+    k.pivotLength = 120.0;
+    INFO(kinematicsTypeName(type));
+    for (int i = 0; i < 200; ++i) {
+      const Eigen::Vector3d xyz(u(rng), u(rng), u(rng)), abc(angle(rng), angle(rng), angle(rng));
+      const ToolPose p = k.pose(xyz, abc, false);
+      checkNear(k.joints(p.tip, abc), xyz);
+      const std::optional<Eigen::Vector3d> back = k.anglesFor(p.axis, abc);
+      REQUIRE(back);
+      checkNear(k.axis(*back), p.axis);
+      // The angles it came from are one solution: the one chosen is no further from them.
+      CHECK((*back - abc).cwiseAbs().sum() <= 1e-9);
+    }
+  }
+  // Table A about X: an axis with an X component is out of its reach; C goes the short way
+  // round: from C350 the axis of A30 C10 is reached at C370.
+  Kinematics a;
+  a.type = Kinematics::Type::TableA;
+  CHECK_FALSE(a.anglesFor(Eigen::Vector3d(0.6, 0.0, 0.8), Eigen::Vector3d::Zero()));
+  Kinematics ac;
+  ac.type = Kinematics::Type::TableAC;
+  const std::optional<Eigen::Vector3d> c = ac.anglesFor(ac.axis({30.0, 0.0, 10.0}), {30, 0, 350});
+  REQUIRE(c);
+  checkNear(*c, {30.0, 0.0, 370.0});
+}

@@ -18,8 +18,10 @@ TEST_CASE("the moves table: a 3-axis program's columns, and a rotary machine's a
         "line,kind,x,y,z,cx,cy,cz,plane,turns,feed_mm_min\n"
         "2,rapid,0.000000,0.000000,10.000000,,,,,,\n"
         "3,line,10.000000,0.000000,10.000000,,,,,,200\n");
-  // A head-head machine: B and C at each move's end; the G93 move lasts 1/F = 0.25 min, its
-  // feed column the XYZ speed that takes (10 mm in 0.25 min: 40 mm/min).
+  // A head-head machine: B and C at each move's end, and the tool on the part: at B30 the
+  // axis is (-sin 30, 0, cos 30) and the tip 100 mm below the pivot, (100 sin 30, 0,
+  // 100 (1 - cos 30)) = (50, 0, 13.3975) from the joints' point. The G93 move lasts 1/F =
+  // 0.25 min, its feed column the XYZ speed that takes (10 mm in 0.25 min: 40 mm/min).
   ReaderOptions o;
   MachineSetup m;
   m.name = "head.json";
@@ -27,8 +29,12 @@ TEST_CASE("the moves table: a 3-axis program's columns, and a rotary machine's a
   m.kinematics.pivotLength = 100.0;
   o.machine = m;
   CHECK(movesTable(readProgramText(program, "head.ngc", o)) ==
-        "line,kind,x,y,z,a_deg,b_deg,c_deg,cx,cy,cz,plane,turns,feed_mm_min,minutes\n"
-        "2,rapid,0.000000,0.000000,10.000000,0.000000,0.000000,0.000000,,,,,,,\n"
-        "3,line,10.000000,0.000000,10.000000,0.000000,0.000000,0.000000,,,,,,200,\n"
-        "4,line,20.000000,0.000000,10.000000,0.000000,30.000000,0.000000,,,,,,40,0.25\n");
+        "line,kind,x,y,z,a_deg,b_deg,c_deg,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cx,cy,cz,"
+        "plane,turns,feed_mm_min,minutes\n"
+        "2,rapid,0.000000,0.000000,10.000000,0.000000,0.000000,0.000000,0.000000,0.000000,"
+        "10.000000,0.000000,0.000000,1.000000,,,,,,,\n"
+        "3,line,10.000000,0.000000,10.000000,0.000000,0.000000,0.000000,10.000000,0.000000,"
+        "10.000000,0.000000,0.000000,1.000000,,,,,,200,\n"
+        "4,line,20.000000,0.000000,10.000000,0.000000,30.000000,0.000000,70.000000,0.000000,"
+        "23.397460,-0.500000,0.000000,0.866025,,,,,,40,0.25\n");
 }

@@ -361,6 +361,22 @@ TEST_CASE("a tilted ball slot on a 4th axis: the segment's area times its length
                AptCutter::ball(6.0, 18.0), again, {});
   CHECK(joints.removed == Approx(res.removed).epsilon(1e-9));
 
+  // The same cut on a tilted work plane (Fanuc G68.2: Euler angles I about Z, J about X', K
+  // about Z''; J-30 turns the plane's Z to (0, sin 30, cos 30), where A30 points the tool) on
+  // the joints' machine: G53.1 turns A, and the plane's coordinates are the tip's turned back,
+  // Rx(30 deg) tip. The same poses: the same removal (1e-9, the roundings of two sums).
+  std::snprintf(prog, sizeof prog,
+                "G21 G90 G94\nG68.2 X0 Y0 Z0 I0 J-30 K0\nG53.1\nG0 X-5 Y%.9f Z30\n"
+                "G0 Z%.9f\nG1 X25 F300\nG0 Z30\nG69\nM2\n",
+                y, z);
+  const Toolpath onPlane = readProgramText(prog, "plane.ngc", onMachine(k, {-5, 10, 40}));
+  REQUIRE(onPlane.frames.size() == 1);
+  REQUIRE(onPlane.moves.size() >= 4);
+  CHECK(onPlane.moves[0].rotaryEnd.x() == Approx(30.0).epsilon(1e-12));  // G53.1's turn of A
+  VoxelStock third = VoxelStock::box(b, 0.3);
+  const SimulationResult plane = simulate(onPlane, AptCutter::ball(6.0, 18.0), third, {});
+  CHECK(plane.removed == Approx(res.removed).epsilon(1e-9));
+
   // The dexel stock's rays are vertical: refused with the line.
   DexelStock dexels = DexelStock::box(b, 0.3);
   CHECK_THROWS_WITH(simulate(path, AptCutter::ball(6.0, 18.0), dexels, {}),
