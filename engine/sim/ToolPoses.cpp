@@ -72,10 +72,13 @@ StepPath stepPath(const Move& m, double t0, double t1, const Kinematics& k,
     // The kinematics and the tilted plane carry the whole move rigidly (a turn and a shift).
     const Eigen::Vector3d axis = k.axis(m.rotaryStart);
     p.axisStart = p.axisEnd = axis;
+    // (Only an XY arc asks whether the carrying turn keeps Z: two poses, not on every step.)
+    auto keepsZ = [&] {
+      const Eigen::Vector3d z = tipAt(p.start + Eigen::Vector3d::UnitZ(), t0) - tipAt(p.start, t0);
+      return (z - Eigen::Vector3d::UnitZ()).squaredNorm() <= 1e-24;
+    };
     const bool upright = (axis - Eigen::Vector3d::UnitZ()).squaredNorm() <= 1e-24;
-    const Eigen::Vector3d z = tipAt(p.start + Eigen::Vector3d::UnitZ(), t0) - tipAt(p.start, t0);
-    const bool keepsZ = (z - Eigen::Vector3d::UnitZ()).squaredNorm() <= 1e-24;
-    if (p.kind == StepPath::Kind::ArcXY && !(upright && keepsZ)) {
+    if (p.kind == StepPath::Kind::ArcXY && !(upright && keepsZ())) {
       // An XY arc with the tool tilted, or on a tilted plane: a polyline.
       p.kind = StepPath::Kind::Polyline;
       for (int i = 0; i <= kPieces; ++i)
