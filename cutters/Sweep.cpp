@@ -5,6 +5,7 @@
 #include "cutters/Numbers.h"
 #include "cutters/Tolerances.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -316,6 +317,7 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
   const double reachAll = std::hypot(cutter_.maxRadius(), cutter_.height());
   const double turn = std::acos(std::clamp(path.axisStart.dot(path.axisEnd), -1.0, 1.0));
   if (turning_) length += reachAll * turn;
+  travel_ = std::max(length, 1e-9);
   if (!flat_ && !convexLine_) {
     const double spacing = resolution / 2.0;
     const int n = std::max(2, static_cast<int>(std::ceil(length / spacing)) + 1);
@@ -359,8 +361,8 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
     box.max += Eigen::Vector3d::Constant(gap);
     bounds_ = box;
     const double half = 0.5 * cutter_.height();
-    middle0_ = tip(0.0) + half * path_.axisAt(0.0);
-    middle1_ = tip(1.0) + half * path_.axisAt(1.0);
+    middle0_ = tip(0.0) + half * sampleAxes_.front();
+    middle1_ = tip(1.0) + half * sampleAxes_.back();
     reach_ = std::hypot(cutter_.maxRadius(), half);
     for (std::size_t i = 0; i < samples_.size(); ++i) {
       const Eigen::Vector3d m = sampleTips_[i] + half * sampleAxes_[i];
@@ -405,14 +407,21 @@ double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient
 
 double Sweep::instance(const Eigen::Vector3d& p, double u) const {
   if (!turning_) return cutter_.signedDistance(p - tip(u));
-  return alongAxis(cutter_, p - tip(u), path_.axisAt(u));
+  return alongAxis(cutter_, p - tip(u), axis(u));
 }
 
 double Sweep::turningDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
                               Eigen::Matrix3d* curvature, double* closest) const {
   // As the search below for steps that change height, each instance on its own axis.
-  const double atEnd = instance(p, 1.0);
+  // (The samples' ends are the step's: u = 0 and 1.)
+  const double atEnd = alongAxis(cutter_, p - sampleTips_.back(), sampleAxes_.back());
   if (atEnd < -band_) return atEnd;
+  // No point of the cutter moves further than travel_ over the step, and the distance to it
+  // changes no more: where the tool has gone t of it, the distance is at least the start's
+  // less t and the end's less travel_ - t, so at least half their sum less travel_.
+  const double atStart = alongAxis(cutter_, p - sampleTips_.front(), sampleAxes_.front());
+  const double ends = 0.5 * (atStart + atEnd - travel_);
+  if (ends > band_) return ends;
   const double bound =
       (closestOnSegment(p, middle0_, middle1_) - p).norm() - middleSpread_ - reach_;
   if (bound > band_) return bound;
@@ -420,24 +429,58 @@ double Sweep::turningDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradien
   const double d = sampled(p, best, band_);
   if (std::isnan(best)) return d;  // (beyond the band: the sign is what counts)
   if (closest) *closest = best;
+  // The closest instance's pose, once for the differences below.
+  const Eigen::Vector3d tipBest = tip(best), axisBest = axis(best);
+  auto f = [&](const Eigen::Vector3d& x) { return alongAxis(cutter_, x - tipBest, axisBest); };
   const double e = resolution_ / 8.0;
-  auto f = [&](const Eigen::Vector3d& x) { return instance(x, best); };
   if (gradient)
     *gradient = Eigen::Vector3d(f(p + Eigen::Vector3d(e, 0, 0)) - f(p - Eigen::Vector3d(e, 0, 0)),
                                 f(p + Eigen::Vector3d(0, e, 0)) - f(p - Eigen::Vector3d(0, e, 0)),
                                 f(p + Eigen::Vector3d(0, 0, e)) - f(p - Eigen::Vector3d(0, 0, e))) /
                 (2.0 * e);
   if (gradient && curvature && std::abs(d) < 0.5 * gradient->lpNorm<1>() * resolution_) {
-    // The swept distance's own second differences: whether the surface there is an envelope
-    // (a ball carried along) or one instance's (a ball turned about its centre) depends on how
-    // the motion moves the surface within itself.
+    // The swept distance g(x) = min over u of f(x, u), the instances' distance: where the
+    // minimum is inside the step (f_u = 0 along it), its Hessian is f_xx - f_xu f_xu^T / f_uu.
+    // A ball carried along loses its curvature along the motion (the envelope); a ball
+    // turned about its centre (f independent of u) keeps its own. Differences at a quarter
+    // `resolution` in space, and the parameter's share of as much travel.
     const Eigen::Vector3d n = gradient->normalized();
-    *curvature = tangentCurvature(
-        [&](const Eigen::Vector3d& x) {
-          double unused = 0.0;
-          return sampled(x, unused);
-        },
-        Eigen::Vector3d(p - d * n), n, resolution_ / 4.0);
+    const Eigen::Vector3d foot = p - d * n;
+    const double ek = resolution_ / 4.0;
+    *curvature = tangentCurvature(f, foot, n, ek);
+    if (best > 0.0 && best < 1.0) {
+      const double du = std::min(0.5, ek / travel_);
+      const double ua = std::max(0.0, best - du), ub = std::min(1.0, best + du);
+      const Eigen::Vector3d tipA = tip(ua), axisA = axis(ua), tipB = tip(ub), axisB = axis(ub);
+      // f_u at x (a difference across [ua, ub]).
+      auto fu = [&](const Eigen::Vector3d& x) {
+        return (alongAxis(cutter_, x - tipB, axisB) - alongAxis(cutter_, x - tipA, axisA)) /
+               (ub - ua);
+      };
+      const double fa = alongAxis(cutter_, foot - tipA, axisA),
+                   fb = alongAxis(cutter_, foot - tipB, axisB), f0 = f(foot);
+      const double fuu = 2.0 * ((fb - f0) / (ub - best) - (f0 - fa) / (best - ua)) / (ub - ua);
+      const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+      const Eigen::Vector3d w =
+          ((fu(foot + ek * t1) - fu(foot - ek * t1)) * t1 +
+           (fu(foot + ek * t2) - fu(foot - ek * t2)) * t2) /
+          (2.0 * ek);
+      const double ww = w.squaredNorm();
+      if (fuu > 0.0 && ww > 0.0) {
+        // Along w the envelope bends no further than the cutter's own least curvature (or
+        // flat): the difference quotient's noise where f_uu is small stays bounded.
+        const Eigen::Vector3d wn = w / std::sqrt(ww);
+        const double along = wn.dot(*curvature * wn);
+        const Eigen::Matrix2d k2{{t1.dot(*curvature * t1), t1.dot(*curvature * t2)},
+                                 {t2.dot(*curvature * t1), t2.dot(*curvature * t2)}};
+        const double least = std::min(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
+                                               k2, Eigen::EigenvaluesOnly)
+                                               .eigenvalues()
+                                               .minCoeff());
+        const double cut = std::min(ww / fuu, along - least);
+        if (cut > 0.0) *curvature -= cut * wn * wn.transpose();
+      }
+    }
   }
   return d;
 }
@@ -558,6 +601,19 @@ double Sweep::distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
     }
   }
   return d;
+}
+
+Eigen::Vector3d Sweep::axis(double u) const {
+  // Between two samples the axis turns on the great circle through theirs, and their
+  // normalised blend lies on that circle: the same axes as StepPath::axisAt without its
+  // sines, at a parameter that differs by the cube of the samples' turn (1e-10 of it for a
+  // 0.1 deg turn).
+  if (sampleAxes_.size() < 2) return path_.axisAt(u);
+  const std::size_t pieces = sampleAxes_.size() - 1;
+  const double at = std::clamp(u, 0.0, 1.0) * static_cast<double>(pieces);
+  const std::size_t i = std::min(pieces - 1, static_cast<std::size_t>(at));
+  const double t = at - static_cast<double>(i);
+  return ((1.0 - t) * sampleAxes_[i] + t * sampleAxes_[i + 1]).normalized();
 }
 
 Eigen::Vector3d Sweep::tip(double u) const {
@@ -690,9 +746,9 @@ double Sweep::facesInFrame(const Eigen::Vector3d& p, double radius, Eigen::Vecto
     // an edge that one plane cannot follow; say so (count 0) and let the caller sample.
     if (std::isnan(best)) sampled(p, best);  // (the distance was a bound)
     const Eigen::Vector3d q = p - tip(best);
-    const Eigen::Vector3d axis = turning_ ? path_.axisAt(best) : Eigen::Vector3d::UnitZ();
-    const double along = q.dot(axis);
-    const Eigen::Vector2d at((q - along * axis).norm(), along);
+    const Eigen::Vector3d a = turning_ ? axis(best) : Eigen::Vector3d::UnitZ();
+    const double along = q.dot(a);
+    const Eigen::Vector2d at((q - along * a).norm(), along);
     for (const ProfileCorner& c : cutter_.corners())
       if (c.at.y() < 0.5 * cutter_.height() && (at - c.at).norm() < radius) count = 0;
     if (count == 0 && curvature) curvature->setZero();

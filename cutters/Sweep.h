@@ -161,6 +161,9 @@ class Sweep {
   /// The tip position at parameter u (StepPath::at, with an arc's radius and start angle
   /// computed once).
   Eigen::Vector3d tip(double u) const;
+  /// The tool's axis at parameter u (StepPath::axisAt's axes, blended between the samples'
+  /// without its sines).
+  Eigen::Vector3d axis(double u) const;
 
   AptCutter cutter_;
   StepPath path_;         ///< in the frame the step is computed in (the tool's where it is tilted)
@@ -174,6 +177,7 @@ class Sweep {
   Eigen::Vector3d middle0_{0.0, 0.0, 0.0}, middle1_{0.0, 0.0, 0.0};
   double middleSpread_ = 0.0, reach_ = 0.0;
   double gap_ = 0.0;   ///< turning_: how far any point of the cutter moves between samples, mm
+  double travel_ = 0.0;  ///< turning_: how far any point of the cutter moves over the step, mm
   bool flat_ = false;  ///< the step keeps its height: closed form
   bool convexLine_ = false;      ///< a straight step of a convex cutter: golden-section search
   bool capsuleLine_ = false;     ///< a straight step of a ball end mill: closed form

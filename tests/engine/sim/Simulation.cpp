@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <random>
 #include <string>
 
 using namespace engage;
@@ -518,6 +519,62 @@ TEST_CASE("a head-head machine turns a ball about its centre: only the carried b
   for (const StepRecord& s : res.steps)
     if (s.line == 4) turnSeconds += s.dt;
   CHECK(turnSeconds == Approx(30.0 / 200.0 * 60.0).epsilon(1e-9));
+}
+
+TEST_CASE("random simultaneous B/C moves of a ball about its centre cut as the upright ball",
+          "[sim]") {
+  // Head B/C with the pivot at the ball's centre: whatever B and C do, the ball's centre
+  // follows the joints (plus r), so where only the ball reaches the stock the turning tool
+  // removes what the upright ball removes on the same path: per move the capsule of its
+  // centre's line (a closed form in the sweep), less what earlier moves took. Random programs:
+  // the centre 1.55-2.7 mm above the top face (the ball 0.3-1.45 mm deep), B within 30 deg
+  // (the shank's lowest point r sin 30 = 1.5 mm below the centre stays above the face), C
+  // anywhere, every move turning. Bounds, the same grid for both runs so that they differ by
+  // the turning sweep alone: each move within 0.5 % of the upright's where that is 1 mm^3 or
+  // more, within one cell's volume otherwise; the totals within 0.05 %.
+  Kinematics k;
+  k.type = Kinematics::Type::HeadBC;
+  k.pivotLength = 3.0;
+  const double h = 0.25;
+  Box3 b;
+  b.min = {0, 0, -10};
+  b.max = {30, 30, 0};
+  std::mt19937 rng(48);
+  std::uniform_real_distribution<double> xy(3.0, 27.0), z(1.55 - 3.0, 2.7 - 3.0),
+      tilt(-30.0, 30.0), turn(-180.0, 180.0);
+  for (int program = 0; program < 3; ++program) {
+    std::string turning = "G21 G90 G94\nG0 X15 Y15 Z20 B0 C0\n", upright = turning;
+    char line[160];
+    for (int m = 0; m < 6; ++m) {
+      const double x = xy(rng), y = xy(rng), zz = z(rng), bb = tilt(rng), cc = turn(rng);
+      std::snprintf(line, sizeof line, "G1 X%.4f Y%.4f Z%.4f B%.4f C%.4f F600\n", x, y, zz, bb,
+                    cc);
+      turning += line;
+      std::snprintf(line, sizeof line, "G1 X%.4f Y%.4f Z%.4f B0 C0 F600\n", x, y, zz);
+      upright += line;
+    }
+    turning += "G0 Z20\nM2\n";
+    upright += "G0 Z20\nM2\n";
+    auto run = [&](const std::string& text) {
+      VoxelStock stock = VoxelStock::box(b, h);
+      return removedByLine(simulate(readProgramText(text, "turning.ngc", onMachine(k, {15, 15, 20})),
+                                    AptCutter::ball(6.0, 18.0), stock, {}));
+    };
+    const std::vector<double> turned = run(turning), held = run(upright);
+    REQUIRE(turned.size() == held.size());
+    double total = 0.0, heldTotal = 0.0;
+    for (std::size_t i = 0; i < held.size(); ++i) {
+      INFO("program " << program << " line " << i << ":\n" << turning);
+      if (held[i] >= 1.0)
+        CHECK(turned[i] == Approx(held[i]).epsilon(5e-3));
+      else
+        CHECK(std::abs(turned[i] - held[i]) <= h * h * h);
+      total += turned[i];
+      heldTotal += held[i];
+    }
+    CHECK(heldTotal > 50.0);  // (the programs cut)
+    CHECK(total == Approx(heldTotal).epsilon(5e-4));
+  }
 }
 
 TEST_CASE("a ball turning its lead while it cuts reads the contact and forces of its pose",
