@@ -461,10 +461,9 @@ double Sweep::turningDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradien
                    fb = alongAxis(cutter_, foot - tipB, axisB), f0 = f(foot);
       const double fuu = 2.0 * ((fb - f0) / (ub - best) - (f0 - fa) / (best - ua)) / (ub - ua);
       const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
-      const Eigen::Vector3d w =
-          ((fu(foot + ek * t1) - fu(foot - ek * t1)) * t1 +
-           (fu(foot + ek * t2) - fu(foot - ek * t2)) * t2) /
-          (2.0 * ek);
+      const Eigen::Vector3d w = ((fu(foot + ek * t1) - fu(foot - ek * t1)) * t1 +
+                                 (fu(foot + ek * t2) - fu(foot - ek * t2)) * t2) /
+                                (2.0 * ek);
       const double ww = w.squaredNorm();
       if (fuu > 0.0 && ww > 0.0) {
         // Along w the envelope bends no further than the cutter's own least curvature (or
@@ -473,10 +472,10 @@ double Sweep::turningDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradien
         const double along = wn.dot(*curvature * wn);
         const Eigen::Matrix2d k2{{t1.dot(*curvature * t1), t1.dot(*curvature * t2)},
                                  {t2.dot(*curvature * t1), t2.dot(*curvature * t2)}};
-        const double least = std::min(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
-                                               k2, Eigen::EigenvaluesOnly)
-                                               .eigenvalues()
-                                               .minCoeff());
+        const double least =
+            std::min(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(k2, Eigen::EigenvaluesOnly)
+                              .eigenvalues()
+                              .minCoeff());
         const double cut = std::min(ww / fuu, along - least);
         if (cut > 0.0) *curvature -= cut * wn * wn.transpose();
       }

@@ -176,9 +176,9 @@ class Sweep {
   /// how far from the segment between them the middle strays and the cutter reaches (mm).
   Eigen::Vector3d middle0_{0.0, 0.0, 0.0}, middle1_{0.0, 0.0, 0.0};
   double middleSpread_ = 0.0, reach_ = 0.0;
-  double gap_ = 0.0;   ///< turning_: how far any point of the cutter moves between samples, mm
+  double gap_ = 0.0;     ///< turning_: how far any point of the cutter moves between samples, mm
   double travel_ = 0.0;  ///< turning_: how far any point of the cutter moves over the step, mm
-  bool flat_ = false;  ///< the step keeps its height: closed form
+  bool flat_ = false;    ///< the step keeps its height: closed form
   bool convexLine_ = false;      ///< a straight step of a convex cutter: golden-section search
   bool capsuleLine_ = false;     ///< a straight step of a ball end mill: closed form
   Parallelogram capsule_;        ///< capsuleLine_: the ball centre's path, up to h - r

@@ -3,6 +3,8 @@
 #include "engine/sim/ToolPoses.h"
 
 #include <cstdio>
+#include <string>
+#include <string_view>
 
 namespace engage {
 
@@ -14,23 +16,29 @@ std::string movesTable(const Toolpath& path) {
                              "axis_k,cx,cy,cz,plane,turns,feed_mm_min,minutes\n"
                            : "line,kind,x,y,z,cx,cy,cz,plane,turns,feed_mm_min\n";
   char buf[256];
+  // A value with six decimals and its comma; one that rounds to zero is written 0.000000,
+  // whatever its sign (a joint at -1e-13 after a read-back).
+  auto add = [&](double v) {
+    std::snprintf(buf, sizeof buf, "%.6f,", v);
+    out += std::string_view(buf) == "-0.000000," ? "0.000000," : buf;
+  };
   auto row = [&](const Move& m, const Eigen::Vector3d& p) {
-    std::snprintf(buf, sizeof buf, "%d,%s,%.6f,%.6f,%.6f,", m.line, moveKindName(m.kind), p.x(),
-                  p.y(), p.z());
-    out += buf;
+    out += std::to_string(m.line) + "," + moveKindName(m.kind) + ",";
+    for (int a = 0; a < 3; ++a)
+      add(p[a]);
     if (rotary) {
-      std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,", m.rotaryEnd.x(), m.rotaryEnd.y(),
-                    m.rotaryEnd.z());
-      out += buf;
+      for (int a = 0; a < 3; ++a)
+        add(m.rotaryEnd[a]);
       const ToolPose pose = movePose(m, path.kinematics, path.frameOf(m), p, m.rotaryEnd);
-      std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,", pose.tip.x(), pose.tip.y(),
-                    pose.tip.z(), pose.axis.x(), pose.axis.y(), pose.axis.z());
-      out += buf;
+      for (int a = 0; a < 3; ++a)
+        add(pose.tip[a]);
+      for (int a = 0; a < 3; ++a)
+        add(pose.axis[a]);
     }
     if (m.kind == MoveKind::Arc) {
-      std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%s,%d,", m.center.x(), m.center.y(),
-                    m.center.z(), planeName(m.plane), m.turns);
-      out += buf;
+      for (int a = 0; a < 3; ++a)
+        add(m.center[a]);
+      out += std::string(planeName(m.plane)) + "," + std::to_string(m.turns) + ",";
     } else {
       out += ",,,,,";
     }

@@ -1,6 +1,7 @@
 #include "engine/run/Resolution.h"
 
 #include "cutters/Numbers.h"
+#include "engine/sim/ToolPoses.h"
 #include "stock/DexelStock.h"
 #include "stock/VoxelStock.h"
 
@@ -18,6 +19,18 @@ namespace {
 double lowestZ(const Move& m) {
   double z = std::min(m.start.z(), m.end.z());
   for (const Eigen::Vector3d& p : m.points)
+    z = std::min(z, p.z());
+  return z;
+}
+
+/// The same for the tip on the part where the move's words are not its terms (the joints of
+/// a rotary machine, a tilted work plane's coordinates): through the kinematics, at the ends
+/// of the pieces stepPath cuts it into.
+double lowestTipZ(const Move& m, const Toolpath& path) {
+  if (!path.kinematics.rotary() && path.frames.empty()) return lowestZ(m);
+  const StepPath sp = stepPath(m, 0.0, 1.0, path);
+  double z = std::min(sp.start.z(), sp.end.z());
+  for (const Eigen::Vector3d& p : sp.points)
     z = std::min(z, p.z());
   return z;
 }
@@ -42,7 +55,7 @@ ProgramEngagement programEngagement(const Toolpath& path, const CutterSet& cutte
   if (stockTop)
     for (const Move& m : path.moves) {
       if (m.kind == MoveKind::Rapid) continue;
-      const double depth = *stockTop - lowestZ(m);
+      const double depth = *stockTop - lowestTipZ(m, path);
       const double len = moveLength(m);
       if (depth > 0.0 && len > 0.0) depths[m.tool].emplace_back(depth, len);
     }

@@ -50,7 +50,8 @@ constexpr double kStockBudgetBytes = 2e9;
 constexpr double kStepBudget = 1e6;
 
 /// The engagement of `path` in a stock whose top is `stockTop` (mm): for each tool, the depth
-/// below the top of its feed moves' lowest points, the median weighted by their length, and the
+/// below the top of its feed moves' lowest tip points on the part (through the machine's
+/// kinematics and a tilted work plane), the median weighted by their length, and the
 /// diameter its profile reaches at that depth (AptCutter::maxRadiusBelow); the tool of the
 /// smallest such diameter. Without a cut below the top: the smallest cutter, nominal.
 ProgramEngagement programEngagement(const Toolpath& path, const CutterSet& cutters,

@@ -467,6 +467,7 @@ std::string summaryJson(const RunResult& result) {
   j["agreement_paper"] = {{"straight", agreement(r.straightPaper)},
                           {"concave", agreement(r.concavePaper)},
                           {"convex", agreement(r.convexPaper)}};
+  j["analytic_not_applied"] = {{"oblique_tool_steps", r.obliqueSteps}};
   ordered_json largest = ordered_json::array();
   for (const Difference& d : r.largest)
     largest.push_back({{"step", d.step},
@@ -676,11 +677,24 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
         lines.push_back(result.sim.steps[i].line);
     if (!lines.empty())
       w.push_back(
-          "the force model does not cover what a ball's, a cone's or a corner radius's end cuts "
-          "where the tool descends (plunges, ramps, helices), nor a stopped spindle: those "
-          "feeds were kept at most as programmed (line(s) " +
-          lineList(lines) + ")");
+          std::string(job.schedule.analytic
+                          ? "the analytic model has no value where a step cuts with a tool "
+                            "oblique to the part, a retract or an arc tighter than the cutter"
+                          : "") +
+          (job.schedule.analytic && job.simulation.physics ? ", and " : "") +
+          (!job.schedule.analytic || job.simulation.physics
+               ? "the force model does not cover what a ball's, a cone's or a corner radius's "
+                 "end cuts where the tool descends (plunges, ramps, helices), nor a stopped "
+                 "spindle"
+               : "") +
+          ": those feeds were kept at most as programmed (line(s) " + lineList(lines) + ")");
   }
+  if (result.sim.obliqueSteps > 0)
+    w.push_back(std::to_string(result.sim.obliqueSteps) +
+                " cutting step(s) of a tool tilted off the part's X, Y and Z, or whose axis "
+                "turns: the analytic model (the paper's, for a tool square to the faces it cuts) "
+                "does not apply there; their analytic MRR is left empty (NaN) and out of the "
+                "comparison");
   if (result.sim.stoppedSteps > 0)
     w.push_back(std::to_string(result.sim.stoppedSteps) +
                 " cutting step(s) with the spindle stopped or no S word: no chip or forces; "

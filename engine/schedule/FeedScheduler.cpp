@@ -430,6 +430,14 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
       out.binding[i] = Binding::NoTarget;
       continue;
     }
+    if (o.analytic && !std::isfinite(s.mrrExact) && s.removed > 0.0) {
+      // A step that cuts where the analytic model has no value (a tool oblique to the part,
+      // a retract through material, an arc tighter than the cutter): not air, never faster
+      // than programmed.
+      out.wanted[i] = std::clamp(s.feed, fMin, fMax);
+      out.binding[i] = Binding::Unmodelled;
+      continue;
+    }
     const double mrr = stepLoad(s, o);
     const bool air = target > 0.0 ? mrr < kAirShare * target
                                   : !(sim.loads[i].hMax > 0.0) && !std::isnan(sim.loads[i].hMax);

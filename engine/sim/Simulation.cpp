@@ -186,6 +186,15 @@ void analytic(StepRecord& r, const AptCutter& cutter, const Eigen::Vector3d& tra
   }
 }
 
+/// Whether the step's tool is neither square to the part's faces nor steady: its axis turns,
+/// or lies off the part's X, Y and Z (a tool along one of them meets a box's faces square or
+/// parallel, as the paper's upright tool does).
+bool obliqueToPart(const StepPath& sp) {
+  if (!sp.tilted()) return false;
+  if (sp.turning()) return true;
+  return sp.axisEnd.cwiseAbs().maxCoeff() < 1.0 - 1e-6;  // (within 0.08 deg)
+}
+
 void accumulate(Agreement& a, double measured, double analytic) {
   if (!(std::isfinite(analytic) && analytic > 0.0)) return;
   const double rel = std::abs(measured / analytic - 1.0);
@@ -678,7 +687,10 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
 
       // The analytic model of this step: its stepover and depth (given or measured).
       r.mrrExact = r.mrrPaper = 0.0;
-      if (contact.cutting) {
+      if (contact.cutting && obliqueToPart(sp)) {
+        r.mrrExact = r.mrrPaper = kNaN;
+        ++out.obliqueSteps;
+      } else if (contact.cutting) {
         // (While the axis turns, at the speed the chip is taken at.)
         StepRecord at = r;
         if (!std::isnan(contact.feed)) at.feed = contact.feed;

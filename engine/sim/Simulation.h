@@ -170,6 +170,10 @@ struct SimulationResult {
   /// Cutting steps without horizontal motion of a cutter without a flat end (no load model).
   std::size_t plungeSteps = 0;
   std::size_t stoppedSteps = 0;  ///< cutting steps with no spindle speed (no load model)
+  /// Cutting steps of a tool whose axis lies off the part's axes or turns: the paper's model
+  /// (a tool square to the faces it cuts, feeding across its axis) does not apply; their
+  /// mrrExact and mrrPaper are NaN, outside the comparison.
+  std::size_t obliqueSteps = 0;
 };
 
 /// Ask every simulation of this process to stop at its next step: simulate() and

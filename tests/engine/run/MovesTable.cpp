@@ -37,4 +37,15 @@ TEST_CASE("the moves table: a 3-axis program's columns, and a rotary machine's a
         "10.000000,0.000000,0.000000,1.000000,,,,,,200,\n"
         "4,line,20.000000,0.000000,10.000000,0.000000,30.000000,0.000000,70.000000,0.000000,"
         "23.397460,-0.500000,0.000000,0.866025,,,,,,40,0.25\n");
+  // A value that rounds to zero is written without a sign: on a tilted plane G53.1 leaves
+  // joints at -1e-15 or so (I0 J-30 on this chain's A: the plane's X along the part's).
+  m.kinematics = Kinematics{};
+  m.kinematics.type = Kinematics::Type::TableAC;
+  o.machine = m;
+  const std::string table = movesTable(readProgramText(
+      "G21 G90 G94\nG0 X0 Y0 Z60\nG68.2 X10 Y10 Z0 I0 J-30 K0\nG53.1\nG0 X0 Y0 Z10\n"
+      "G1 X5 F100\nG69\nG0 Z80\nM2\n",
+      "plane.ngc", o));
+  CHECK(table.find("-0.000000") == std::string::npos);
+  CHECK(table.find(",0.000000,") != std::string::npos);
 }

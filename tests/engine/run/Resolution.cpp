@@ -16,6 +16,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 using namespace engage;
@@ -77,6 +78,28 @@ TEST_CASE("the engagement is the diameter reached at the cutting moves' median d
     CHECK_FALSE(above.known);
     CHECK(above.engaged == Approx(3.175).margin(1e-12));
     CHECK_FALSE(programEngagement(grooveToolpath(0.07, 10.0), single(vbit), std::nullopt).known);
+  }
+  SECTION("depths of the tip on the part, whatever the words' terms") {
+    // A table-A machine at A30 (the table turns the part about X through the origin): the
+    // tip held by the controller at Y0 Z-0.5, or the joints that put it there, Rx(30) of it:
+    // Y 0.25, Z -0.433. Either way the groove is 0.5 mm deep on the part.
+    ReaderOptions o;
+    MachineSetup m;
+    m.name = "table-a.json";
+    m.kinematics.type = Kinematics::Type::TableA;
+    m.kinematics.tcp = true;
+    m.start = {0, 0, 30};
+    o.machine = m;
+    const char* tip = "G21 G90\nG0 X0 Y0 Z5 A30\nG1 Z-0.5 F100\nG1 X10 F600\nG0 Z5\nM2\n";
+    CHECK(programEngagement(readProgramText(tip, "tip.ngc", o), single(vbit), 0.0).depth ==
+          Approx(0.5).margin(1e-9));
+    o.machine->kinematics.tcp = false;
+    char joints[160];
+    std::snprintf(joints, sizeof joints,
+                  "G21 G90\nG0 X0 Y%.12f Z5 A30\nG1 Z%.12f F100\nG1 X10 F600\nG0 Z5\nM2\n",
+                  0.5 * std::sin(deg(30.0)), -0.5 * std::cos(deg(30.0)));
+    CHECK(programEngagement(readProgramText(joints, "joints.ngc", o), single(vbit), 0.0).depth ==
+          Approx(0.5).margin(1e-9));
   }
 }
 

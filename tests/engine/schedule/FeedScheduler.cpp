@@ -255,6 +255,40 @@ TEST_CASE("the analytic model can drive the schedule instead of the measurement"
       CHECK(sc.feed[i] == Approx(600.0));
 }
 
+TEST_CASE("from the analytic model, a step that cuts where the model has no value is not air",
+          "[schedule]") {
+  // A synthetic run at 1000 mm/min: 4 steps in air (nothing removed), then 6 that cut at a
+  // measured 2000 mm^3/min where the analytic model has no value (NaN: a tool oblique to the
+  // part, a retract through material), then 6 the model reads at 1500 mm^3/min. With a target
+  // of 3000 and an air feed of 2500 mm/min: the air runs at the air feed, the unmodelled cut
+  // at most as programmed (not the air feed), the modelled cut at target / model x 1000
+  // = 2000 mm/min (levels of 5 % round it down, so within 5 %).
+  const Toolpath path = readProgramText("G21 G90\nG1 X16 F1000\nM2\n", "line.ngc");
+  SimulationResult sim = straightRun(16, 1000.0, [](int i) { return i < 4 ? 0.0 : 2000.0; });
+  for (int i = 0; i < 16; ++i) {
+    StepRecord& st = sim.steps[static_cast<std::size_t>(i)];
+    st.removed = st.mrr * st.dt / 60.0;
+    st.mrrExact = i < 4 ? 0.0 : i < 10 ? std::nan("") : 1500.0;
+  }
+  ScheduleOptions o;
+  o.targetMrr = 3000.0;
+  o.feedMax = 3000.0;
+  o.airFeed = 2500.0;
+  o.analytic = true;
+  const Schedule sc = scheduleFeeds(path, sim, o);
+  for (std::size_t i = 0; i < 16; ++i) {
+    CAPTURE(i);
+    if (i < 4) {
+      CHECK(sc.binding[i] == Binding::Air);
+    } else if (i < 10) {
+      CHECK(sc.binding[i] == Binding::Unmodelled);
+      CHECK(sc.wanted[i] <= 1000.0);
+    } else {
+      CHECK(sc.wanted[i] == Approx(2000.0).epsilon(1e-12));
+    }
+  }
+}
+
 TEST_CASE("changeDistance: S-curve distances worked by hand", "[schedule]") {
   // a = 500 mm/s^2, j = 5000 mm/s^3: a^2/j = 50 mm/s. From 10 to 40 mm/s (dv = 30 < 50): the
   // acceleration is a triangle, T = 2 sqrt(30/5000) = 0.15492 s, distance 25 T = 3.873 mm.

@@ -346,7 +346,10 @@ TEST_CASE("a tilted ball slot on a 4th axis: the segment's area times its length
   CHECK(mid.width == Approx(1.0 / std::sin(a)).margin(0.06));
   CHECK(mid.depth ==
         Approx(r - (r - 1.0) * std::cos(a) + std::sqrt(2.0 * r - 1.0) * std::sin(a)).margin(0.06));
-  CHECK(std::isfinite(mid.mrrExact));
+  // A tool leaning into the face it cuts is not the paper's square cut (the model was 35 %
+  // off here on average): no analytic MRR, counted.
+  CHECK(std::isnan(mid.mrrExact));
+  CHECK(res.obliqueSteps > 0);
 
   // The same cut with the joints programmed (no tcp): the machine's Z and Y are the tip turned
   // by Rx(30 deg) about the table's axis through the origin.
@@ -462,6 +465,10 @@ TEST_CASE("a tool lying on a 4th axis slots a side face: its contact and forces 
     CHECK(lying.step.width == Approx(2 * R).epsilon(0.005));
     CHECK(lying.step.depth == Approx(depth).margin(0.05));
     CHECK(lying.step.engagementRad == Approx(kPi).margin(0.5 * kPi / 180));
+    // A tool along the part's Y meets the side face square: the analytic model applies, on
+    // the width and depth read (their margins above: 0.5 % and 0.05 mm of 3, so 2 %).
+    CHECK(std::isfinite(lying.step.mrrExact));
+    CHECK(lying.step.mrrExact == Approx(upright.step.mrrExact).epsilon(0.02));
     double fx = 0.0, fy = 0.0, fz = 0.0;
     if (ball) {
       const LinearCoefficients& q = coefficients;
@@ -540,15 +547,14 @@ TEST_CASE("random simultaneous B/C moves of a ball about its centre cut as the u
   b.min = {0, 0, -10};
   b.max = {30, 30, 0};
   std::mt19937 rng(48);
-  std::uniform_real_distribution<double> xy(3.0, 27.0), z(1.55 - 3.0, 2.7 - 3.0),
-      tilt(-30.0, 30.0), turn(-180.0, 180.0);
+  std::uniform_real_distribution<double> xy(3.0, 27.0), z(1.55 - 3.0, 2.7 - 3.0), tilt(-30.0, 30.0),
+      turn(-180.0, 180.0);
   for (int program = 0; program < 3; ++program) {
     std::string turning = "G21 G90 G94\nG0 X15 Y15 Z20 B0 C0\n", upright = turning;
     char line[160];
     for (int m = 0; m < 6; ++m) {
       const double x = xy(rng), y = xy(rng), zz = z(rng), bb = tilt(rng), cc = turn(rng);
-      std::snprintf(line, sizeof line, "G1 X%.4f Y%.4f Z%.4f B%.4f C%.4f F600\n", x, y, zz, bb,
-                    cc);
+      std::snprintf(line, sizeof line, "G1 X%.4f Y%.4f Z%.4f B%.4f C%.4f F600\n", x, y, zz, bb, cc);
       turning += line;
       std::snprintf(line, sizeof line, "G1 X%.4f Y%.4f Z%.4f B0 C0 F600\n", x, y, zz);
       upright += line;
@@ -557,8 +563,9 @@ TEST_CASE("random simultaneous B/C moves of a ball about its centre cut as the u
     upright += "G0 Z20\nM2\n";
     auto run = [&](const std::string& text) {
       VoxelStock stock = VoxelStock::box(b, h);
-      return removedByLine(simulate(readProgramText(text, "turning.ngc", onMachine(k, {15, 15, 20})),
-                                    AptCutter::ball(6.0, 18.0), stock, {}));
+      return removedByLine(
+          simulate(readProgramText(text, "turning.ngc", onMachine(k, {15, 15, 20})),
+                   AptCutter::ball(6.0, 18.0), stock, {}));
     };
     const std::vector<double> turned = run(turning), held = run(upright);
     REQUIRE(turned.size() == held.size());
