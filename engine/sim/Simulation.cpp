@@ -691,14 +691,9 @@ SimulationResult simulate(const Toolpath& path, const CutterSet& cutters, Stock&
         r.mrrExact = r.mrrPaper = kNaN;
         ++out.obliqueSteps;
       } else if (contact.cutting) {
-        // (While the axis turns, at the speed the chip is taken at.)
-        StepRecord at = r;
-        if (!std::isnan(contact.feed)) at.feed = contact.feed;
-        analytic(at, cutter, sp.toolToPart().transpose() * (sp.end - sp.start),
+        analytic(r, cutter, sp.toolToPart().transpose() * (sp.end - sp.start),
                  options.stepover.value_or(std::min(r.width, 2.0 * cutter.maxRadius())),
                  std::min(options.depth.value_or(r.depth), cutter.height()));
-        r.mrrExact = at.mrrExact;
-        r.mrrPaper = at.mrrPaper;
       }
       out.steps.push_back(r);
       if (options.progress && (si % 256 == 0 || si + 1 == plan.size()))
