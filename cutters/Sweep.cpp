@@ -361,8 +361,8 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
     box.max += Eigen::Vector3d::Constant(gap);
     bounds_ = box;
     const double half = 0.5 * cutter_.height();
-    middle0_ = tip(0.0) + half * sampleAxes_.front();
-    middle1_ = tip(1.0) + half * sampleAxes_.back();
+    middle0_ = sampleTips_.front() + half * sampleAxes_.front();
+    middle1_ = sampleTips_.back() + half * sampleAxes_.back();
     reach_ = std::hypot(cutter_.maxRadius(), half);
     for (std::size_t i = 0; i < samples_.size(); ++i) {
       const Eigen::Vector3d m = sampleTips_[i] + half * sampleAxes_[i];

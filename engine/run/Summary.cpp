@@ -675,19 +675,20 @@ std::vector<std::string> runWarnings(const RunResult& result, const WrittenOutpu
       if (result.plan.binding[i] == Binding::Unmodelled &&
           (lines.empty() || lines.back() != result.sim.steps[i].line))
         lines.push_back(result.sim.steps[i].line);
-    if (!lines.empty())
-      w.push_back(
-          std::string(job.schedule.analytic
-                          ? "the analytic model has no value where a step cuts with a tool "
-                            "oblique to the part, a retract or an arc tighter than the cutter"
-                          : "") +
-          (job.schedule.analytic && job.simulation.physics ? ", and " : "") +
-          (!job.schedule.analytic || job.simulation.physics
-               ? "the force model does not cover what a ball's, a cone's or a corner radius's "
-                 "end cuts where the tool descends (plunges, ramps, helices), nor a stopped "
-                 "spindle"
-               : "") +
-          ": those feeds were kept at most as programmed (line(s) " + lineList(lines) + ")");
+    if (!lines.empty()) {
+      std::string why;
+      if (job.schedule.analytic)
+        why =
+            "the analytic model has no value where a step cuts with a tool oblique to the "
+            "part, a retract or an arc tighter than the cutter";
+      if (!job.schedule.analytic || job.simulation.physics)
+        why += std::string(why.empty() ? "" : ", and ") +
+               "the force model does not cover what a ball's, a cone's or a corner radius's "
+               "end cuts where the tool descends (plunges, ramps, helices), nor a stopped "
+               "spindle";
+      w.push_back(why + ": those feeds were kept at most as programmed (line(s) " +
+                  lineList(lines) + ")");
+    }
   }
   if (result.sim.obliqueSteps > 0)
     w.push_back(std::to_string(result.sim.obliqueSteps) +

@@ -282,6 +282,15 @@ ReaderOptions onMachine(const Kinematics& k, const Eigen::Vector3d& start) {
   return o;
 }
 
+/// A head B/C machine (5axiskins) whose pivot is the centre of a 6 mm ball (pivot length r =
+/// 3 mm): the joints are the ball's centre less r along Z, whatever B and C do.
+Kinematics headAtBallCentre() {
+  Kinematics k;
+  k.type = Kinematics::Type::HeadBC;
+  k.pivotLength = 3.0;
+  return k;
+}
+
 /// Each source line's removal, mm^3 (index: the line).
 std::vector<double> removedByLine(const SimulationResult& r) {
   std::vector<double> byLine;
@@ -500,9 +509,7 @@ TEST_CASE("a head-head machine turns a ball about its centre: only the carried b
   // back while the centre moves 10 mm along X takes the segment times 10 mm (the cap moved
   // ahead, the one behind already cut); turning B and C at X20 takes nothing. Tolerances: the
   // voxel stock's slot (0.1 %, as above); nothing within a fifth of a cell's volume.
-  Kinematics k;
-  k.type = Kinematics::Type::HeadBC;
-  k.pivotLength = 3.0;
+  const Kinematics k = headAtBallCentre();
   const double r = 3.0, h = 0.3;
   const Toolpath path = readProgramText(
       "G21 G90 G94\nG0 X10 Y10 Z10 B0 C0\nG1 Z-1 F100\nG1 B30 F200\nG1 X20 B0 F300\n"
@@ -539,9 +546,7 @@ TEST_CASE("random simultaneous B/C moves of a ball about its centre cut as the u
   // anywhere, every move turning. Bounds, the same grid for both runs so that they differ by
   // the turning sweep alone: each move within 0.5 % of the upright's where that is 1 mm^3 or
   // more, within one cell's volume otherwise; the totals within 0.05 %.
-  Kinematics k;
-  k.type = Kinematics::Type::HeadBC;
-  k.pivotLength = 3.0;
+  const Kinematics k = headAtBallCentre();
   const double h = 0.25;
   Box3 b;
   b.min = {0, 0, -10};
@@ -592,9 +597,7 @@ TEST_CASE("a ball turning its lead while it cuts reads the contact and forces of
   // the ball along its own sphere). The same slot with B held at the angle a middle step ends
   // at is the same cut seen from the same frame: width, depth and angles within a fifth of a
   // cell (the cells lie differently), mean forces within 1 % of the resultant.
-  Kinematics k;
-  k.type = Kinematics::Type::HeadBC;
-  k.pivotLength = 3.0;
+  const Kinematics k = headAtBallCentre();
   const double h = 0.3;
   Box3 b;
   b.min = {0, 0, -10};
