@@ -49,6 +49,18 @@ std::string fWord(const Move& m, double feed, double length) {
   return "F" + fmt(feed / unitOf(m), m.inch ? 3 : 2);
 }
 
+bool turnsRotary(const Move& m) {
+  return m.rotaryStart != m.rotaryEnd;
+}
+
+/// The F word of piece p of move m, the share `fraction` of the move: its feed, or where it
+/// carries a scale, the move's own F scaled (G93: 1 / the piece's duration in minutes).
+std::string pieceFWord(const Move& m, const FeedPiece& p, double fraction) {
+  if (!(p.scale > 0.0)) return fWord(m, p.feed, moveLength(m) * fraction);
+  if (m.feedMode == FeedMode::InverseTime) return "F" + fmt(p.scale / (m.minutes * fraction), 6);
+  return fWord(m, m.feed * p.scale, moveLength(m) * fraction);
+}
+
 /// The line with the words of `remove` taken out (with the blanks after them) and `insert`
 /// (space-separated words) put where the first removed word was, or after the last word
 /// when nothing is removed.
@@ -92,6 +104,7 @@ class PieceWriter {
  public:
   explicit PieceWriter(const Move& m) : m_(m), u_(unitOf(m)), d_(coordinateDecimals(m)) {
     emitted_ = program(m.start);
+    emittedRotary_ = m.rotaryStart;
   }
 
   /// Words (without F) for the piece from the current position to fraction `t`.
@@ -107,6 +120,17 @@ class PieceWriter {
       if (std::abs(delta) < 0.5 * std::pow(10.0, -d_) && !inPlane) continue;
       w += (w.empty() ? "" : " ") + std::string(1, kAxis[a]) +
            fmt(m_.incremental ? delta : end[a], d_);
+    }
+    // The rotary axes the move turns, degrees, interpolated with X, Y, Z as the move is.
+    static const char kRotary[3] = {'A', 'B', 'C'};
+    for (int a = 0; a < 3; ++a) {
+      if (m_.rotaryStart[a] == m_.rotaryEnd[a]) continue;
+      const double at = std::stod(fmt(
+          last ? m_.rotaryEnd[a] : m_.rotaryStart[a] + t1 * (m_.rotaryEnd[a] - m_.rotaryStart[a]),
+          kRotaryDecimals));
+      w += (w.empty() ? "" : " ") + std::string(1, kRotary[a]) +
+           fmt(m_.incremental ? at - emittedRotary_[a] : at, kRotaryDecimals);
+      emittedRotary_[a] = at;
     }
     if (m_.kind == MoveKind::Arc) {
       const Eigen::Vector3d c = program(m_.center);
@@ -132,10 +156,14 @@ class PieceWriter {
     return r;
   }
 
+  /// Degrees to 1e-7: 1.7e-7 mm of a point 100 mm from the axis.
+  static constexpr int kRotaryDecimals = 7;
+
   const Move& m_;
   double u_;
   int d_;
   Eigen::Vector3d emitted_;
+  Eigen::Vector3d emittedRotary_;
 };
 
 std::string motionWord(const Move& m) {
@@ -162,7 +190,7 @@ std::vector<bool> changedMoves(const Toolpath& path, const FeedPlan& plan) {
         throw Error("feed plan of move " + std::to_string(i + 1) + " (line " +
                     std::to_string(m.line) +
                     "): pieces must end at increasing fractions in (0, 1]");
-      if (!(std::isfinite(p.feed) && p.feed > 0.0))
+      if (!(std::isfinite(p.feed) && p.feed > 0.0) || !(std::isfinite(p.scale) && p.scale >= 0.0))
         throw Error("feed plan of move " + std::to_string(i + 1) + " (line " +
                     std::to_string(m.line) + "): feeds must be positive");
       previous = p.until;
@@ -173,7 +201,12 @@ std::vector<bool> changedMoves(const Toolpath& path, const FeedPlan& plan) {
     if (m.kind == MoveKind::Rapid)
       throw Error("feed plan of move " + std::to_string(i + 1) + " (line " +
                   std::to_string(m.line) + "): a rapid has no feed");
-    changes[i] = !(pieces.size() == 1 && sameFeed(pieces[0].feed, m.feed));
+    if (turnsRotary(m) != (pieces.front().scale > 0.0))
+      throw Error("feed plan of move " + std::to_string(i + 1) + " (line " +
+                  std::to_string(m.line) +
+                  "): a move that turns rotary axes takes scaled pieces, others feeds");
+    changes[i] = !(pieces.size() == 1 && (turnsRotary(m) ? sameFeed(pieces[0].scale, 1.0)
+                                                         : sameFeed(pieces[0].feed, m.feed)));
     if (changes[i] && m.fixedFeed())
       throw Error(path.files[static_cast<std::size_t>(m.file)] + ":" + std::to_string(m.line) +
                   ": the feed of spindle-synchronised motion (G33, G33.1) or probing (G38.x) "
@@ -255,8 +288,12 @@ std::string writeProgram(const std::string& source, const Toolpath& path, const 
       // original F is restored on the next line that feeds by F.
       const bool spindleFeed =
           !feedMoves.empty() && path.moves[feedMoves.front()].feedSource == FeedSource::Spindle;
-      if (!feedMoves.empty() && !spindleFeed && (changed || dirty)) {
-        const Move& first = path.moves[feedMoves.front()];
+      const Move* lead = feedMoves.empty() ? nullptr : &path.moves[feedMoves.front()];
+      // An inverse-time line carries its own F: no earlier edit leaks into it. (An edited one
+      // leaks into the next units-per-minute line that gives none, as the modal F.)
+      const bool leak = dirty && lead && lead->feedMode != FeedMode::InverseTime;
+      if (lead && !spindleFeed && (changed || leak)) {
+        const Move& first = *lead;
         if (feedMoves.size() > 1 || first.kind == MoveKind::Spline) {
           // Canned cycles and splines: one F for the line.
           double feed =
@@ -268,31 +305,30 @@ std::string writeProgram(const std::string& source, const Toolpath& path, const 
                           ": a canned cycle or spline line takes one feed; the plan splits it");
           }
           emitted = {editLine(text, block, "F", fWord(first, feed, moveLength(first)))};
-          dirty = first.feedMode != FeedMode::InverseTime && changed;
+          dirty = changed;
         } else if (!changes[feedMoves.front()] || plan[feedMoves.front()].size() == 1) {
-          const double feed =
-              changes[feedMoves.front()] ? plan[feedMoves.front()].front().feed : first.feed;
-          emitted = {editLine(text, block, "F", fWord(first, feed, moveLength(first)))};
-          dirty = first.feedMode != FeedMode::InverseTime && changes[feedMoves.front()];
+          const FeedPiece piece = changes[feedMoves.front()] ? plan[feedMoves.front()].front()
+                                                             : FeedPiece{1.0, first.feed, 0.0};
+          emitted = {editLine(text, block, "F", pieceFWord(first, piece, 1.0))};
+          dirty = changes[feedMoves.front()];
         } else {
           // Split a line or an arc where its feed changes.
           const auto& pieces = plan[feedMoves.front()];
           PieceWriter writer(first);
-          const double length = moveLength(first);
           emitted.clear();
           double t0 = 0.0;
           for (std::size_t k = 0; k < pieces.size(); ++k) {
             const bool last = k + 1 == pieces.size();
             const double t1 = last ? 1.0 : pieces[k].until;
             const std::string words =
-                writer.words(t0, t1, last) + " " + fWord(first, pieces[k].feed, length * (t1 - t0));
+                writer.words(t0, t1, last) + " " + pieceFWord(first, pieces[k], t1 - t0);
             if (k == 0)
-              emitted.push_back(editLine(text, block, "XYZIJKRPF@^", words));
+              emitted.push_back(editLine(text, block, "XYZABCIJKRPF@^", words));
             else
               emitted.push_back(motionWord(first) + " " + words);
             t0 = t1;
           }
-          dirty = first.feedMode != FeedMode::InverseTime;
+          dirty = true;
         }
       }
     }

@@ -3,7 +3,8 @@
 /// Writes a program back with new feeds, changing nothing else: comments, non-motion lines,
 /// units and distance modes stay as they were. A move whose feed changes along its length is
 /// split where the feed changes: lines into lines, arcs and helices into sub-arcs (I/J/K
-/// centres in the move's own arc-centre mode, P turns where a piece exceeds a full turn).
+/// centres in the move's own arc-centre mode, P turns where a piece exceeds a full turn),
+/// with the rotary axes' A/B/C words at the split points where the move turns them.
 /// Where an edited feed would leak into later lines through the modal F, the next feed move
 /// gets its original F back explicitly.
 ///
@@ -20,10 +21,17 @@
 namespace engage {
 
 /// One piece of a move's new feed: from the previous piece's end up to fraction `until` of
-/// the move's length (0 < until <= 1), at `feed` mm/min.
+/// the move (0 < until <= 1; the fraction of its words' interpolation, which for a move that
+/// turns rotary axes is not the fraction of the tip's travel), at `feed` mm/min.
+///
+/// A move that turns rotary axes has no one tip speed its F word sets: its pieces carry
+/// `scale`, the rate of all its axes over the programmed one (`feed` is then the lowest tip
+/// speed on the part the piece runs at, for reading only). The piece's F word is the move's
+/// own times `scale`; under inverse time (G93), 1 / the piece's duration.
 struct FeedPiece {
   double until = 1.0;
   double feed = 0.0;
+  double scale = 0.0;  ///< > 0: the piece's rate over the programmed one (see above)
 };
 
 /// New feeds: one entry per move of the tool path; an empty entry keeps the move as it was.

@@ -852,14 +852,6 @@ Job buildJob(JobCommand command, const OptionValues& values, UnitSystem& speak) 
     so.stepover = parseQuantity(text("stepover"), Dimension::Length, sys, "--stepover").value;
   if (!text("depth").empty())
     so.depth = parseQuantity(text("depth"), Dimension::Length, sys, "--depth").value;
-  if (job.scheduling())
-    for (const Move& m : job.path.moves)
-      if (m.kind != MoveKind::Rapid && turnsRotary(m))  // (rapids that index them are kept)
-        throw ParameterError(
-            job.path.files[static_cast<std::size_t>(m.file)] + ":" + std::to_string(m.line) +
-            ": this feed move turns rotary axes; re-feeding such moves is not built yet (their "
-            "feeds would be re-written as inverse time): simulate the program, or re-feed one "
-            "whose rotary axes move in rapids only (3+2)");
   if (job.scheduling()) job.schedule = scheduleOptions(values, sys, job);
   so.physics = physicsOptions(values, sys);
   stockOptions(job, values, project, sys);

@@ -2,6 +2,7 @@
 
 #include "cutters/Error.h"
 #include "engine/model/EngagementModel.h"
+#include "engine/sim/ToolPoses.h"
 #include "engine/units/Quantity.h"
 
 #include <algorithm>
@@ -558,23 +559,54 @@ void settleFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
 }
 
 /// The feed plan the writer follows: per move, its runs of one feed as pieces; the F words.
-void planPieces(const Toolpath& path, const SimulationResult& sim, Schedule& out) {
+/// A piece ends where a step ends (StepRecord::t1: the fraction of the move's words).
+///
+/// A move that turns rotary axes runs all its axes at one rate per F word, so its tip's speed
+/// on the part follows the joints' motion along it: a piece scales the programmed rate, by
+/// the least of its steps' new-to-programmed speed ratios (no step runs faster than
+/// scheduled); a new piece starts where its steps' ratios would spread by more than
+/// `minChange`. Those steps' feeds become the speeds the scale gives them.
+void planPieces(const Toolpath& path, const SimulationResult& sim, double minChange,
+                Schedule& out) {
   const auto& st = sim.steps;
   out.plan.assign(path.moves.size(), {});
-  std::vector<double> moveLength(path.moves.size(), 0.0);
-  for (const StepRecord& s : st)
-    moveLength[s.move] += s.length;
-  std::vector<double> done(path.moves.size(), 0.0);
+  std::size_t pieceStart = 0;  // a turning move's piece: its first step and largest ratio
+  double pieceMax = 0.0;
   for (std::size_t i = 0; i < st.size(); ++i) {
     const StepRecord& s = st[i];
-    done[s.move] += s.length;
     if (!isFeedStep(s)) continue;
     auto& pieces = out.plan[s.move];
-    const double until = std::min(1.0, done[s.move] / moveLength[s.move]);
-    if (!pieces.empty() && pieces.back().feed == out.feed[i])
-      pieces.back().until = until;
-    else
-      pieces.push_back({until, out.feed[i]});
+    const double until = std::min(1.0, s.t1);
+    if (!turnsRotary(path.moves[s.move])) {
+      if (!pieces.empty() && pieces.back().feed == out.feed[i])
+        pieces.back().until = until;
+      else
+        pieces.push_back({until, out.feed[i], 0.0});
+      continue;
+    }
+    const double ratio = out.feed[i] / s.feed;
+    if (pieces.empty() ||
+        std::max(pieceMax, ratio) > std::min(pieces.back().scale, ratio) * (1.0 + minChange)) {
+      pieces.push_back({until, 0.0, ratio});
+      pieceStart = i;
+      pieceMax = ratio;
+    }
+    FeedPiece& p = pieces.back();
+    p.until = until;
+    p.scale = std::min(p.scale, ratio);
+    pieceMax = std::max(pieceMax, ratio);
+    p.feed = std::numeric_limits<double>::infinity();
+    for (std::size_t k = pieceStart; k <= i; ++k)
+      p.feed = std::min(p.feed, p.scale * st[k].feed);
+  }
+  // The turning moves' steps at the speeds their pieces' scales give them.
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    if (!isFeedStep(st[i]) || !turnsRotary(path.moves[st[i].move])) continue;
+    const auto& pieces = out.plan[st[i].move];
+    const auto piece =
+        std::lower_bound(pieces.begin(), pieces.end(), std::min(1.0, st[i].t1) - 1e-12,
+                         [](const FeedPiece& p, double t) { return p.until < t; });
+    out.feed[i] = piece->scale * st[i].feed;
   }
   for (auto& pieces : out.plan) {
     if (pieces.empty()) continue;
@@ -620,7 +652,7 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
 
   wantedFeeds(path, sim, o, floor, fMax, out);
   settleFeeds(path, sim, o, floor, out);
-  planPieces(path, sim, out);
+  planPieces(path, sim, o.minChange, out);
   std::vector<double> programmed(st.size(), 0.0);
   for (std::size_t i = 0; i < st.size(); ++i)
     programmed[i] = st[i].feed;

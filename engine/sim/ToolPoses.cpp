@@ -133,7 +133,8 @@ double rotaryMoveMinutes(const Move& m) {
   if (!(m.feed > 0.0)) return 0.0;
   const double length = moveLength(m);
   if (length > 0.0) return length / m.feed;
-  return (m.rotaryEnd - m.rotaryStart).norm() / m.feed;
+  // F in degrees per minute: not scaled by the inch (Move::feed is F x 25.4 under G20).
+  return (m.rotaryEnd - m.rotaryStart).norm() / (m.inch ? m.feed / 25.4 : m.feed);
 }
 
 }  // namespace engage

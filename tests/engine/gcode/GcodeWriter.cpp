@@ -163,6 +163,54 @@ TEST_CASE("inverse-time programs get an F per piece", "[gcode]") {
   CHECK(out == "G21 G90 G93\nG1 X5 F60\nG1 X10 F240\nG1 X20 F30\nM2\n");
 }
 
+TEST_CASE("moves that turn rotary axes: A/B/C at the split points, F scaled", "[gcode]") {
+  // Hand values: a piece of fraction f at scale s runs f x (the move's minutes) / s.
+  SECTION("units per minute: the F word times the scale, the axes on the move's line") {
+    const std::string src = "G21 G90 G94\nG0 X0 Y0 Z5 A0 B0\nG1 X10 A30 B-15 F200\nM2\n";
+    const Toolpath t = read(src);
+    FeedPlan plan = unchanged(t);
+    plan[1] = {{0.25, 1.0, 0.5}, {0.6, 1.0, 1.5}, {1.0, 1.0, 0.8}};
+    const std::string out = writeProgram(src, t, plan);
+    INFO(out);
+    CHECK_THAT(out, Contains("G1 X2.5 A7.5 B-3.75 F100\nG1 X6 A18 B-9 F300\nG1 X10 A30 B-15 F160"));
+    const Toolpath back = read(out);
+    REQUIRE(back.moves.size() == 4);
+    for (std::size_t k = 1; k < 4; ++k) {
+      const double t1 = back.moves[k].end.x() / 10.0;  // X and the axes interpolate together
+      CHECK(back.moves[k].rotaryEnd.x() == Approx(30.0 * t1).margin(1e-9));
+      CHECK(back.moves[k].rotaryEnd.y() == Approx(-15.0 * t1).margin(1e-9));
+    }
+  }
+  SECTION("inverse time: each piece's F is 1 / its duration") {
+    // 10 mm at F2 (0.5 min): pieces 0.4 at scale 2 (0.1 min: F10), 0.6 at 0.5 (0.6 min:
+    // F1.666667); then A alone turning 90 deg at F4 (0.25 min), halved at scale 4 and 1
+    // (0.03125 and 0.125 min: F32 and F8).
+    const std::string src = "G21 G90 G93\nG1 X10 A20 F2\nG1 A110 F4\nM2\n";
+    const Toolpath t = read(src);
+    FeedPlan plan = unchanged(t);
+    plan[0] = {{0.4, 1.0, 2.0}, {1.0, 1.0, 0.5}};
+    plan[1] = {{0.5, 1.0, 4.0}, {1.0, 1.0, 1.0}};
+    const std::string out = writeProgram(src, t, plan);
+    CHECK(out == "G21 G90 G93\nG1 X4 A8 F10\nG1 X10 A20 F1.666667\nG1 A65 F32\nG1 A110 F8\nM2\n");
+  }
+  SECTION("incremental, one piece, and the modal F restored after it") {
+    const std::string src = "G21 G91 G94\nG1 X1 C10 F100\nG1 X1\nG93 G1 X1 F5\nG94 G1 X1\nM2\n";
+    const Toolpath t = read(src);
+    FeedPlan plan = unchanged(t);
+    plan[0] = {{1.0, 1.0, 2.0}};  // one piece: the line keeps its words
+    plan[2] = {{1.0, 1.0, 0.5}};  // a move that turns nothing takes a feed, not a scale
+    CHECK_THROWS_WITH(writeProgram(src, t, plan), Contains("takes scaled pieces"));
+    plan[2] = {{1.0, 2.5}};  // 1 mm at 2.5 mm/min: F2.5 in inverse time
+    const std::string out = writeProgram(src, t, plan);
+    // The edited G93 line's F would leak into the G94 line after it as its modal F: that
+    // line gets the feed it was read with back, the G93 F5 taken as 5 mm/min.
+    CHECK(out == "G21 G91 G94\nG1 X1 C10 F200\nG1 X1 F100\nG93 G1 X1 F2.5\nG94 G1 X1 F5\nM2\n");
+    plan[0] = {{0.3, 1.0, 2.0}, {1.0, 1.0, 1.0}};
+    const std::string split = writeProgram(src, t, plan);
+    CHECK_THAT(split, Contains("G1 X0.3 C3 F200\nG1 X0.7 C7 F100\nG1 X1 F100"));
+  }
+}
+
 TEST_CASE("programs that do not run line by line cannot be re-fed in place", "[gcode]") {
   const std::string src = "G21 F100\no1 repeat [2]\nG91 G1 X1\no1 endrepeat\nM2\n";
   const Toolpath t = read(src);

@@ -44,6 +44,8 @@ SimulationResult straightRun(int count, double feed, const std::function<double(
     s.line = 2;
     s.kind = MoveKind::Line;
     s.length = 1.0;
+    s.t0 = static_cast<double>(i) / count;
+    s.t1 = static_cast<double>(i + 1) / count;
     s.arcLength = i + 1.0;
     s.end = {i + 1.0, 0, 0};
     s.feed = feed;
@@ -224,6 +226,53 @@ TEST_CASE("F words: levels a minimum change apart, rounded down, air feed, short
   CHECK(merged.fWords <= sc.fWords);
   for (std::size_t i = 4; i < 20; ++i)
     CHECK(merged.feed[i] <= merged.wanted[i] * (1.025 + 1e-12));
+}
+
+TEST_CASE("a move that turns rotary axes: pieces scale its rate, none faster than scheduled",
+          "[schedule]") {
+  // A synthetic run on one move that turns A: 10 steps whose tip speeds on the part rise 1 %
+  // a step from 100 mm/min (the joints run at one rate, the tip does not), each cutting at
+  // 10 x its speed: the target 500 mm^3/min wants 50 mm/min on every step, the ratios
+  // 0.5 .. 0.459: 9 % apart, more than the 5 % a piece may spread, so two pieces.
+  const std::string source = "G21 G90 G94\nG1 X10 A90 F100\nM2\n";
+  const Toolpath path = readProgramText(source, "turn.ngc");
+  SimulationResult sim =
+      straightRun(10, 100.0, [](int i) { return 10.0 * 100.0 * (1.0 + 0.01 * i); });
+  for (std::size_t i = 0; i < 10; ++i) {
+    sim.steps[i].feed = 100.0 * (1.0 + 0.01 * static_cast<double>(i));
+    sim.steps[i].dt = 60.0 / sim.steps[i].feed;
+  }
+  ScheduleOptions o;
+  o.targetMrr = 500.0;
+  o.minChange = 0.05;
+  const Schedule sc = scheduleFeeds(path, sim, o);
+  REQUIRE(sc.plan[0].size() == 2);
+  double until = 0.0;
+  std::size_t steps = 0;
+  for (const FeedPiece& p : sc.plan[0]) {
+    CHECK(p.scale > 0.0);
+    for (std::size_t i = 0; i < 10; ++i) {
+      if (!(sim.steps[i].t1 > until + 1e-12 && sim.steps[i].t1 <= p.until + 1e-12)) continue;
+      // The step at the piece's scale.
+      CHECK(sc.feed[i] == Approx(p.scale * sim.steps[i].feed).epsilon(1e-12));
+      // At most the feed the target wants, 1e-12 for rounding; at least that less one level
+      // (the levels are 5 % apart) and the 5 % the piece's ratios may spread.
+      CHECK(sc.feed[i] <= sc.wanted[i] * (1.0 + 1e-12));
+      CHECK(sc.feed[i] >= sc.wanted[i] / (1.05 * 1.05) * (1.0 - 1e-12));
+      ++steps;
+    }
+    const double k = p.until * 10.0;  // pieces end where steps end
+    CHECK(k == Approx(std::round(k)).margin(1e-9));
+    until = p.until;
+  }
+  CHECK(steps == 10);
+  // Written back: the F word is the programmed F100 times each piece's scale, A on X's line.
+  const Toolpath back = readProgramText(writeProgram(source, path, sc.plan), "turn.ngc");
+  REQUIRE(back.moves.size() == 2);
+  for (std::size_t k = 0; k < 2; ++k) {
+    CHECK(back.moves[k].feed == Approx(100.0 * sc.plan[0][k].scale).margin(0.005));  // F, 2 dp
+    CHECK(back.moves[k].rotaryEnd.x() == Approx(9.0 * back.moves[k].end.x()).margin(1e-6));
+  }
 }
 
 TEST_CASE("a force limit gives the target MRR through Eq 17-18", "[schedule]") {

@@ -1,6 +1,7 @@
 // Tests of engine/sim/Simulation.h on small programs whose removal is known in closed form.
 
 #include "engine/sim/Simulation.h"
+#include "engine/sim/ToolPoses.h"
 
 #include "cutters/Error.h"
 #include "cutters/Numbers.h"
@@ -533,6 +534,11 @@ TEST_CASE("a head-head machine turns a ball about its centre: only the carried b
   for (const StepRecord& s : res.steps)
     if (s.line == 4) turnSeconds += s.dt;
   CHECK(turnSeconds == Approx(30.0 / 200.0 * 60.0).epsilon(1e-9));
+  // Under G20 F is inches per minute along X, Y, Z, still degrees per minute for the rotary
+  // axes alone: A 0 -> 30 at F200 takes 0.15 min, then 1 in of X at 200 in/min 0.005 min.
+  const Toolpath inch = readProgramText("G20 G90 G94\nG1 A30 F200\nG1 X1 A60\nM2\n", "in.ngc");
+  CHECK(rotaryMoveMinutes(inch.moves[0]) == Approx(30.0 / 200.0).epsilon(1e-12));
+  CHECK(rotaryMoveMinutes(inch.moves[1]) == Approx(1.0 / 200.0).epsilon(1e-12));
 }
 
 TEST_CASE("random simultaneous B/C moves of a ball about its centre cut as the upright ball",
