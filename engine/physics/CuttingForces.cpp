@@ -153,18 +153,31 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
   for (const EdgeSlice& s : slices) {
     const Edge q = edgeOf(s);
     const double sk = std::sin(q.kappa);
+    // The chip's factor x sin(phi) + y cos(phi) = R sin(phi + psi): largest at
+    // phi = pi/2 - psi (+ 2 pi k), zero at -psi (+ pi k).
+    const double R = s.feedShare.norm(), psi = std::atan2(s.feedShare.y(), s.feedShare.x());
     for (const auto& arc : s.arcs) {
-      const double half = 0.5 * (arc[1] - arc[0]), mid = 0.5 * (arc[1] + arc[0]);
-      // The thickest chip: at phi = pi/2 when the arc holds it.
-      const double sinMax = arc[0] <= 0.5 * kPi && arc[1] >= 0.5 * kPi
+      const double top = std::remainder(0.5 * kPi - psi - arc[0], 2.0 * kPi);
+      const double sinMax = (top >= 0.0 ? top : top + 2.0 * kPi) <= arc[1] - arc[0]
                                 ? 1.0
-                                : std::max(std::sin(arc[0]), std::sin(arc[1]));
-      out.hMax = std::max(out.hMax, fz * sinMax * sk);
-      for (std::size_t i = 0; i < g.x.size(); ++i) {
-        const double phi = mid + half * g.x[i];
-        const double w = half * g.w[i] * q.length;
-        const double h = fz * std::max(0.0, std::sin(phi)) * sk;
-        addMean(w, q.radius, h, element(material, h), directions(phi, q.kappa));
+                                : std::max(std::sin(arc[0] + psi), std::sin(arc[1] + psi));
+      out.hMax = std::max(out.hMax, fz * R * sinMax * sk);
+      // The arc in pieces where the chip's factor crosses zero (a kink the quadrature would
+      // smear), each integrated on its own.
+      double from = arc[0];
+      for (double zero = -psi + std::ceil((arc[0] + psi) / kPi) * kPi;; zero += kPi) {
+        const double to = std::min(zero, arc[1]);
+        if (to > from) {
+          const double half = 0.5 * (to - from), mid = 0.5 * (to + from);
+          for (std::size_t i = 0; i < g.x.size(); ++i) {
+            const double phi = mid + half * g.x[i];
+            const double w = half * g.w[i] * q.length;
+            const double h = fz * std::max(0.0, R * std::sin(phi + psi)) * sk;
+            addMean(w, q.radius, h, element(material, h), directions(phi, q.kappa));
+          }
+        }
+        from = std::max(from, to);
+        if (!(zero < arc[1])) break;
       }
     }
   }
@@ -204,7 +217,9 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
         double phi = std::fmod(theta + j * pitch - s.z * lagPerMm, 2.0 * kPi);
         if (phi < 0.0) phi += 2.0 * kPi;
         if (!engaged(s, phi)) continue;
-        const double h = fz * std::max(0.0, std::sin(phi)) * sk;
+        const double h =
+            fz * std::max(0.0, s.feedShare.x() * std::sin(phi) + s.feedShare.y() * std::cos(phi)) *
+            sk;
         sm.add(q.length, element(material, h), directions(phi, q.kappa));
       }
     }

@@ -39,6 +39,11 @@ struct EdgeSlice {
   /// cylinder, towards 0 at a ball's tip). The chip is f_z sin(phi) sin(kappa) thick and
   /// the edge dz / sin(kappa) long.
   double kappa = 0.0;
+  /// The slice's own feed per tooth across the axis over the step's f_z, along the contact's
+  /// `feed` and `side` (EdgeEngagement): (1, 0) where every slice moves as the step does. A
+  /// tool whose axis turns moves each height differently; its chip at phi is then
+  /// f_z (x sin(phi) + y cos(phi)) sin(kappa).
+  Eigen::Vector2d feedShare{1.0, 0.0};
   std::vector<std::array<double, 2>> arcs;  ///< engaged immersion angles [from, to], rad
   /// Where the force model takes the slice: the middle of its edge by length along the
   /// profile (near a ball's tip well below the middle height, where kappa and the edge's

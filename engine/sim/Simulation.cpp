@@ -363,7 +363,8 @@ struct StepContact {
   double descent = 0.0;
   double rpm = 0.0;  ///< the spindle speed the step runs at (0: stopped or unknown)
   /// The speed the chip is taken at, mm/min: where the axis turns, that of the point on it at
-  /// the corner's centre height (StepContact's direction); NaN: the step's feed.
+  /// the corner's centre height (StepContact's direction; each slice of the edge then takes
+  /// its own share of it, EdgeSlice::feedShare); NaN: the step's feed.
   double feed = std::numeric_limits<double>::quiet_NaN();
 };
 
@@ -399,6 +400,20 @@ StepContact measureContact(const Move& m, const StepPath& sp, double dtSeconds, 
   c.edge = measureEngagement(stock, cutter, sp.end, d.head<2>(), c.rpm >= 0.0,
                              std::min(cutter.height(), rem.top + h), toolCurvature(m, sp),
                              afterStep, toPart);
+  if (sp.turning() && sp.points.size() >= 2 && d.head<2>().norm() > 0.0) {
+    // Each slice's own motion over the last piece (the point on the axis at its height),
+    // across the axis, against the travel the step's f_z is taken from.
+    const std::size_t n = sp.points.size();
+    const double pieces = static_cast<double>(n - 1);
+    const Eigen::Vector3d before = sp.axisAt((pieces - 1.0) / pieces);
+    const double across = d.head<2>().norm();
+    for (EdgeSlice& s : c.edge.slices) {
+      const Eigen::Vector3d own =
+          toPart.transpose() * (sp.points[n - 1] - sp.points[n - 2] + s.z * (sp.axisEnd - before));
+      s.feedShare =
+          Eigen::Vector2d(own.head<2>().dot(c.edge.feed), own.head<2>().dot(c.edge.side)) / across;
+    }
+  }
   return c;
 }
 

@@ -84,6 +84,36 @@ TEST_CASE("mean forces and torque of a slot and of half immersion up and down mi
         Approx(-N * a * c * 168.8 / 4.0 - N * a * 26.6 / kPi).epsilon(1e-9));  // -139.75 N
 }
 
+TEST_CASE("a slice's own feed, scaled and turned: the chip of arcs turned with it", "[physics]") {
+  // A slice whose feed per tooth is s times the step's, turned by beta towards `side`
+  // (EdgeSlice::feedShare = s (cos beta, sin beta): a tool whose axis turns), cuts at phi the
+  // chip c s sin(phi + beta): the step's own feed at c s over the arcs turned by beta. So its
+  // torque, largest and mean chip are theirs, and its mean force theirs turned about the axis
+  // (the same across it and along it). Round-off: 1e-9.
+  const Material m = linearMaterial();
+  for (const double beta : {0.0, 0.3, -0.4, 1.2})
+    for (const double s : {1.5, 0.7}) {
+      CAPTURE(beta, s);
+      EdgeEngagement e = cylinder(0.2, 2.0);
+      for (EdgeSlice& slice : e.slices)
+        slice.feedShare = s * Eigen::Vector2d(std::cos(beta), std::sin(beta));
+      const StepLoad load = cuttingLoad(e, m, {N, 0.0, R}, c, 10000.0);
+      const StepLoad want =
+          cuttingLoad(cylinder(0.2 + beta, 2.0 + beta), m, {N, 0.0, R}, c * s, 10000.0);
+      CHECK(load.torque == Approx(want.torque).epsilon(1e-9));
+      CHECK(load.hMax == Approx(want.hMax).epsilon(1e-12));
+      CHECK(load.hMean == Approx(want.hMean).epsilon(1e-9));
+      CHECK(load.force.z() == Approx(want.force.z()).epsilon(1e-9));
+      CHECK(load.force.head<2>().norm() == Approx(want.force.head<2>().norm()).epsilon(1e-9));
+    }
+  // Turned by 1.2 rad the arcs reach past pi, where the chip is 0: h_max c s (at phi + beta =
+  // pi/2, inside [1.4, 3.2]).
+  EdgeEngagement e = cylinder(0.2, 2.0);
+  for (EdgeSlice& slice : e.slices)
+    slice.feedShare = 0.7 * Eigen::Vector2d(std::cos(1.2), std::sin(1.2));
+  CHECK(cuttingLoad(e, m, {N, 0.0, R}, c, 10000.0).hMax == Approx(0.7 * c).epsilon(1e-12));
+}
+
 TEST_CASE("chip thinning of a 10 % side cut and the mean chip thickness", "[physics]") {
   const Material m = linearMaterial();
   const double D = 2 * R, ae = 0.1 * D;

@@ -731,6 +731,57 @@ TEST_CASE("random simultaneous A/C moves of a ball on a trunnion against its cen
   }
 }
 
+TEST_CASE("a flat end mill tilting about its tip takes each height's own feed", "[sim]") {
+  // Head B/C pivoting at the tip (joints = tip): a 6 mm flat end mill slots 5 mm deep along X
+  // at F300 while B turns -10 -> 10 deg over X 15 -> 20 (20.94 rad/min: a point z above the
+  // tip moves z x 20.94 mm/min slower across the axis than the tip, whose speed across is
+  // 300 cos B: k = 20.94 / (300 cos B), 0.0698 /mm at B = 0; the flute leans back, so the
+  // material it meets above the tip is fresh, as in a held slot). Against the same slot with
+  // B held at the angle the move's middle step ends at: every slice's chip shrinks by
+  // 1 - k z, so the cutting torque (linear model: the chip summed over the flute) by
+  // 1 - k z' over the engaged height d, z' the slices' mean height: d / 2 where all are
+  // engaged alike, up to 0.4 mm more (the slices at the top face, partly engaged, up to 0.4 mm
+  // above it: measured); 1 % for the two runs' slicing. The largest chip, at the lowest
+  // slice's middle (at most 0.35 mm up), shrinks by at most 1 - k 0.35 (0.5 %: the contacts
+  // agree within a fifth of a cell, the test below).
+  Kinematics k;
+  k.type = Kinematics::Type::HeadBC;
+  k.pivotLength = 0.0;
+  Box3 b;
+  b.min = {0, 0, -10};
+  b.max = {40, 20, 0};
+  auto run = [&](const std::string& cut) {
+    VoxelStock stock = VoxelStock::box(b, 0.2);
+    SimulationOptions o;
+    o.physics = linearPhysics(10000.0);
+    return simulate(readProgramText("G21 G90 G94\nG0 X-5 Y10 Z10 B-10 C0\nG1 Z-5 F100\n"
+                                    "G1 X15 F300 S10000 M3\n" +
+                                        cut + "\nG0 Z10\nM2\n",
+                                    "tilt.ngc", onMachine(k, {-5, 10, 20})),
+                    AptCutter::flat(6.0, 18.0, 2), stock, o);
+  };
+  const SimulationResult turning = run("G1 X20 B10");
+  const StepRecord& mid = middleOfLine(turning, 5);
+  const double angle = -10.0 + 20.0 * (mid.end.x() - 15.0) / 5.0;  // B at its end, deg
+  char held[64];
+  std::snprintf(held, sizeof held, "G1 X15 B%.9f\nG1 X30", angle);
+  const SimulationResult fixed = run(held);
+  std::size_t same = 0;
+  for (std::size_t i = 0; i < fixed.steps.size() && same == 0; ++i)
+    if (fixed.steps[i].line == 6 && fixed.steps[i].end.x() > 22.0) same = i;
+  REQUIRE(same > 0);
+  const double kz = 20.0 * kPi / 180.0 / (5.0 / 300.0) /
+                    (300.0 * std::cos(angle * kPi / 180.0));  // 1/mm (the tip's speed across)
+  const double d = fixed.steps[same].depth;
+  CHECK(d == Approx(5.0).margin(0.05));
+  const StepLoad &t = turning.loads[static_cast<std::size_t>(&mid - turning.steps.data())],
+                 &h = fixed.loads[same];
+  CHECK(t.torqueCut / h.torqueCut <= 1.0 - kz * d / 2.0 + 0.01);
+  CHECK(t.torqueCut / h.torqueCut >= 1.0 - kz * (d / 2.0 + 0.4) - 0.01);
+  CHECK(t.hMax / h.hMax <= 1.005);
+  CHECK(t.hMax / h.hMax >= (1.0 - kz * 0.35) / 1.005);
+}
+
 TEST_CASE("a ball turning its lead while it cuts reads the contact and forces of its pose",
           "[sim]") {
   // Head B/C, the pivot at the ball's centre: the ball (r 3, 1 mm into the top face) slots
