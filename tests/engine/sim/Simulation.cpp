@@ -654,24 +654,30 @@ std::vector<double> ballTubeRemoval(const std::vector<std::vector<Eigen::Vector3
 
 }  // namespace
 
-TEST_CASE("random simultaneous A/C moves of a ball on a trunnion against its centre's tube",
-          "[sim]") {
-  // table-ac with tip control: the tip moves straight on the part while A and C turn, so the
-  // ball's centre (tip + r axis) follows a curve. Random programs: the tip 0.4-1.0 mm below
-  // the top face, so the centre stays 1.6-2.6 mm above it whatever the tilt (A within 30
-  // deg: the axis's Z 0.866-1) and only the ball cuts (the shank's lowest point, r sin 30 =
-  // 1.5 mm below the centre, stays above the face); C anywhere. The reference
+TEST_CASE(
+    "random simultaneous 5-axis moves of a ball on a trunnion and a head against its "
+    "centre's tube",
+    "[sim]") {
+  // table-ac and head-bc (pivot 150 mm) with tip control: the tip moves straight on the part
+  // while the tilt (A, B) and C turn, so the ball's centre (tip + r axis) follows a curve.
+  // Random programs: the tip 0.4-1.0 mm below the top face, so the centre stays 1.6-2.6 mm
+  // above it whatever the tilt (within 30 deg: the axis's Z 0.866-1) and only the ball cuts
+  // (the shank's lowest point, r sin 30 = 1.5 mm below the centre, stays above the face); C
+  // anywhere. The reference
   // (ballTubeRemoval) takes the centres from the kinematics at 0.002 mm of the centre's
   // travel (the balls' union then lies within 1e-6 mm of the tube) and sums columns 0.02 mm
   // apart (halving both spacings and scanning every 25th centre moved no move by more than
-  // 3e-6 of it). Measured: moves within 0.07 %, totals 0.03 %. Bounds, the issue's: each move of
-  // 1 mm^3 or more within 1 %, the totals within 0.1 %; smaller moves within two cells'
-  // volume.
-  Kinematics k;
-  k.type = Kinematics::Type::TableAC;
-  k.tcp = true;
-  k.rotPoint = {15, 15, -20};
-  k.offset = {0, 0, 15};
+  // 3e-6 of it). Measured: moves within 0.07 % (trunnion) and 0.15 % (head), totals 0.03 %. Bounds,
+  // the issue's: each move of 1 mm^3 or more within 1 %, the totals within 0.1 %; smaller moves
+  // within two cells' volume.
+  Kinematics trunnion, head;
+  trunnion.type = Kinematics::Type::TableAC;
+  trunnion.tcp = true;
+  trunnion.rotPoint = {15, 15, -20};
+  trunnion.offset = {0, 0, 15};
+  head.type = Kinematics::Type::HeadBC;
+  head.tcp = true;
+  head.pivotLength = 150.0;
   const double r = 3.0, h = 0.25;
   Box3 b;
   b.min = {0, 0, -10};
@@ -679,12 +685,15 @@ TEST_CASE("random simultaneous A/C moves of a ball on a trunnion against its cen
   std::mt19937 rng(4811);
   std::uniform_real_distribution<double> xy(4.0, 26.0), z(-1.0, -0.4), tilt(-30.0, 30.0),
       turn(-180.0, 180.0);
-  for (int program = 0; program < 4; ++program) {
-    std::string text = "G21 G90 G94\nG0 X15 Y15 Z20 A0 C0\n";
+  for (int program = 0; program < 7; ++program) {
+    const bool onHead = program >= 4;  // four programs on the trunnion, three on the head
+    const Kinematics& k = onHead ? head : trunnion;
+    const char tilted = onHead ? 'B' : 'A';
+    std::string text = std::string("G21 G90 G94\nG0 X15 Y15 Z20 ") + tilted + "0 C0\n";
     char line[160];
     for (int m = 0; m < 5; ++m) {
-      std::snprintf(line, sizeof line, "G1 X%.4f Y%.4f Z%.4f A%.4f C%.4f F600\n", xy(rng), xy(rng),
-                    z(rng), tilt(rng), turn(rng));
+      std::snprintf(line, sizeof line, "G1 X%.4f Y%.4f Z%.4f %c%.4f C%.4f F600\n", xy(rng), xy(rng),
+                    z(rng), tilted, tilt(rng), turn(rng));
       text += line;
     }
     text += "G0 Z20\nM2\n";
