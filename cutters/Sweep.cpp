@@ -405,30 +405,41 @@ double Sweep::signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient
   return d;
 }
 
+double Sweep::distanceWithin(const Eigen::Vector3d& p, double within,
+                             Eigen::Vector3d* gradient) const {
+  if (!turning_) return signedDistance(p, gradient);
+  if (!rotated_) return turningDistance(p, gradient, nullptr, nullptr, within);
+  const double d = turningDistance(toWorld_.transpose() * p, gradient, nullptr, nullptr, within);
+  if (gradient) *gradient = toWorld_ * *gradient;
+  return d;
+}
+
 double Sweep::instance(const Eigen::Vector3d& p, double u) const {
   if (!turning_) return cutter_.signedDistance(p - tip(u));
   return alongAxis(cutter_, p - tip(u), axis(u));
 }
 
 double Sweep::turningDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
-                              Eigen::Matrix3d* curvature, double* closest) const {
+                              Eigen::Matrix3d* curvature, double* closest, double within) const {
   // As the search below for steps that change height, each instance on its own axis.
   // (The samples' ends are the step's: u = 0 and 1.)
+  const double band = std::min(band_, within);
   const double atEnd = alongAxis(cutter_, p - sampleTips_.back(), sampleAxes_.back());
-  if (atEnd < -band_) return atEnd;
+  if (atEnd < -band) return atEnd;
   // No point of the cutter moves further than travel_ over the step, and the distance to it
   // changes no more: where the tool has gone t of it, the distance is at least the start's
   // less t and the end's less travel_ - t, so at least half their sum less travel_.
   const double atStart = alongAxis(cutter_, p - sampleTips_.front(), sampleAxes_.front());
   const double ends = 0.5 * (atStart + atEnd - travel_);
-  if (ends > band_) return ends;
+  if (ends > band) return ends;
   const double bound =
       (closestOnSegment(p, middle0_, middle1_) - p).norm() - middleSpread_ - reach_;
-  if (bound > band_) return bound;
+  if (bound > band) return bound;
   double best = 1.0;
-  const double d = sampled(p, best, band_);
+  const double d = sampled(p, best, band, std::isinf(within) ? -within : -band);
   if (std::isnan(best)) return d;  // (beyond the band: the sign is what counts)
   if (closest) *closest = best;
+  if (std::abs(d) > within) return d;  // (no gradient wanted)
   // The closest instance's pose, once for the differences below.
   const Eigen::Vector3d tipBest = tip(best), axisBest = axis(best);
   auto f = [&](const Eigen::Vector3d& x) { return alongAxis(cutter_, x - tipBest, axisBest); };
@@ -755,7 +766,8 @@ double Sweep::facesInFrame(const Eigen::Vector3d& p, double radius, Eigen::Vecto
   return d;
 }
 
-double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter, double looseBeyond) const {
+double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter, double looseBeyond,
+                      double insideBelow) const {
   auto f = [&](double u) { return instance(p, u); };
   // The best of the candidates (value, parameter) seen so far.
   double bestValue = 0.0;
@@ -807,6 +819,10 @@ double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter, double lo
                               : cutter_.signedDistance(p - sampleTips_[i]);
     if (!any || v < bestValue) best = i;
     consider(samples_[i], v);
+  }
+  if (bestValue < insideBelow) {  // inside by more than that: the minimum is lower still
+    bestParameter = std::numeric_limits<double>::quiet_NaN();
+    return bestValue;
   }
   // No point of the cutter moves further than gap_ between two samples: beyond the surface by
   // more than that (and looseBeyond) their minimum, less gap_ outside, has the swept

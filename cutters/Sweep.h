@@ -102,6 +102,11 @@ class Sweep {
   /// the cube of side `resolution` about p.
   double signedDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient = nullptr,
                         Eigen::Matrix3d* curvature = nullptr) const;
+  /// signedDistance with its gradient where it lies within `within` (mm) of the surface; beyond,
+  /// for a step whose axis turns, a value beyond `within` of the right sign and the gradient
+  /// left as it was (what tells a cube of half-diagonal `within` wholly inside or outside; it
+  /// skips most of the search along the step). Other steps: signedDistance.
+  double distanceWithin(const Eigen::Vector3d& p, double within, Eigen::Vector3d* gradient) const;
   /// The swept solid near p (within `radius`, mm) as the points inside `count` half-spaces
   /// {x : normals[i] . (x - p) + distances[i] <= 0} (unit normals pointing out of the solid,
   /// distances in mm): two where a sharp corner of the profile (a flat bottom's edge) is
@@ -136,18 +141,22 @@ class Sweep {
   /// the axis turns), mm.
   double instance(const Eigen::Vector3d& p, double u) const;
   /// distance() for a step whose axis turns.
-  double turningDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
-                         Eigen::Matrix3d* curvature, double* closest) const;
+  double turningDistance(
+      const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* curvature,
+      double* closest,
+      double within = std::numeric_limits<double>::infinity()) const;  // (distanceWithin)
   /// signedDistance, and where it searched along the step (not a closed form or a bound) the
   /// parameter of the closest tool position in `closest` (NaN otherwise).
   double distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* curvature,
                   double* closest) const;
   /// Minimum over the step of the cutter's distance; the minimising parameter in `best`. Where
-  /// the samples' minimum lies further than `looseBeyond` (mm) from the surface, it is
-  /// returned unrefined (outside, less how far the cutter moves between samples: a bound of
-  /// the right sign) and `best` is NaN.
+  /// the samples' minimum lies further than `looseBeyond` (mm) from the surface, or below
+  /// `insideBelow` (already inside by that much: the minimum is no higher), it is returned
+  /// unrefined (outside, less how far the cutter moves between samples: a bound of the right
+  /// sign) and `best` is NaN.
   double sampled(const Eigen::Vector3d& p, double& best,
-                 double looseBeyond = std::numeric_limits<double>::infinity()) const;
+                 double looseBeyond = std::numeric_limits<double>::infinity(),
+                 double insideBelow = -std::numeric_limits<double>::infinity()) const;
   /// XY distance from p to a height-keeping step's path, with its gradient (unit, or zero
   /// on the path) and the curvature of its level line through p, 1/mm (its second
   /// derivative across the gradient: 0 beside a line, +-1/distance about a point or an arc's

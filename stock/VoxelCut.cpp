@@ -254,9 +254,11 @@ const CornerProbe& probeCorner(const Sweep& sweep, const Eigen::Vector3i& corner
   }
   if (sampled) {
     cutShare = 0.0;
+    // Beyond its half-diagonal a sub-cube is wholly in or out whatever its plane's normal.
+    constexpr double kSubReach = 0.8660254037844386 / kSide;  // sqrt(3) / 2, in voxels
     for (int c = 0; c < kCount; ++c) {
       Eigen::Vector3d g = Eigen::Vector3d::Zero();
-      const double dk = sweep.signedDistance(p + h * centre(c), &g);
+      const double dk = sweep.distanceWithin(p + h * centre(c), kSubReach * h, &g);
       const double gn = g.norm();
       sub[c] =
           HalfSpace{gn > 0.0 ? Eigen::Vector3d(g / gn) : Eigen::Vector3d::Zero(), -dk * kSide / h};
