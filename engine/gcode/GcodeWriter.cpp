@@ -49,10 +49,6 @@ std::string fWord(const Move& m, double feed, double length) {
   return "F" + fmt(feed / unitOf(m), m.inch ? 3 : 2);
 }
 
-bool turnsRotary(const Move& m) {
-  return m.rotaryStart != m.rotaryEnd;
-}
-
 /// The F word of piece p of move m, the share `fraction` of the move: its feed, or where it
 /// carries a scale, the move's own F scaled (G93: 1 / the piece's duration in minutes).
 std::string pieceFWord(const Move& m, const FeedPiece& p, double fraction) {

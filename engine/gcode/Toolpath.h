@@ -165,6 +165,10 @@ double arcRadius(const Move& arc);
 double arcSweep(const Move& arc);
 /// Path length of a move, mm (helices include the axial travel).
 double moveLength(const Move& move);
+/// Whether move `m` turns a rotary axis.
+inline bool turnsRotary(const Move& m) {
+  return m.rotaryStart != m.rotaryEnd;
+}
 /// Position at arc length fraction t in [0, 1] along a move (arcs and helices exactly,
 /// splines along their line pieces). mm.
 Eigen::Vector3d pointAt(const Move& move, double t);

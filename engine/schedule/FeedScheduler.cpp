@@ -2,7 +2,6 @@
 
 #include "cutters/Error.h"
 #include "engine/model/EngagementModel.h"
-#include "engine/sim/ToolPoses.h"
 #include "engine/units/Quantity.h"
 
 #include <algorithm>
@@ -570,8 +569,8 @@ void planPieces(const Toolpath& path, const SimulationResult& sim, double minCha
                 Schedule& out) {
   const auto& st = sim.steps;
   out.plan.assign(path.moves.size(), {});
-  std::size_t pieceStart = 0;  // a turning move's piece: its first step and largest ratio
-  double pieceMax = 0.0;
+  double pieceMax = 0.0, pieceSlowest = 0.0;  // a turning move's piece: its largest ratio and
+                                              // its steps' lowest programmed speed
   for (std::size_t i = 0; i < st.size(); ++i) {
     const StepRecord& s = st[i];
     if (!isFeedStep(s)) continue;
@@ -588,16 +587,15 @@ void planPieces(const Toolpath& path, const SimulationResult& sim, double minCha
     if (pieces.empty() ||
         std::max(pieceMax, ratio) > std::min(pieces.back().scale, ratio) * (1.0 + minChange)) {
       pieces.push_back({until, 0.0, ratio});
-      pieceStart = i;
       pieceMax = ratio;
+      pieceSlowest = s.feed;
     }
     FeedPiece& p = pieces.back();
     p.until = until;
     p.scale = std::min(p.scale, ratio);
     pieceMax = std::max(pieceMax, ratio);
-    p.feed = std::numeric_limits<double>::infinity();
-    for (std::size_t k = pieceStart; k <= i; ++k)
-      p.feed = std::min(p.feed, p.scale * st[k].feed);
+    pieceSlowest = std::min(pieceSlowest, s.feed);
+    p.feed = p.scale * pieceSlowest;
   }
   // The turning moves' steps at the speeds their pieces' scales give them.
   for (std::size_t i = 0; i < st.size(); ++i) {

@@ -31,10 +31,6 @@ StepPath workPath(const Move& m, double t0, double t1) {
 
 }  // namespace
 
-bool turnsRotary(const Move& m) {
-  return m.rotaryStart != m.rotaryEnd;
-}
-
 bool tiltsTool(const Move& m, const Kinematics& k) {
   if (!k.rotary()) return false;
   auto tilted = [&](double t) {

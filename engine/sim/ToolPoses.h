@@ -15,9 +15,6 @@ bool tiltsTool(const Move& m, const Kinematics& k);
 /// Whether any move of `path` does.
 bool tiltsTool(const Toolpath& path);
 
-/// Whether move `m` turns a rotary axis.
-bool turnsRotary(const Move& m);
-
 /// The tip path of move `m` between fractions t0 and t1 of it, in the part's frame, with the
 /// tool's axis at both ends: for a machine without rotary kinematics the move's own path (a
 /// line, an XY arc or helix, or a polyline of 8 pieces for other arcs and splines); where the
