@@ -150,12 +150,20 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
       }
     }
   }
-  for (const EdgeSlice& s : slices) {
+  // Each slice's chip factor x sin(phi) + y cos(phi) of its feedShare (x, y), as
+  // R sin(phi + psi): largest at phi = pi/2 - psi (+ 2 pi k), zero at -psi (+ pi k).
+  struct Share {
+    double R, psi;
+  };
+  std::vector<Share> shares;
+  shares.reserve(slices.size());
+  for (const EdgeSlice& s : slices)
+    shares.push_back({s.feedShare.norm(), std::atan2(s.feedShare.y(), s.feedShare.x())});
+  for (std::size_t k = 0; k < slices.size(); ++k) {
+    const EdgeSlice& s = slices[k];
     const Edge q = edgeOf(s);
     const double sk = std::sin(q.kappa);
-    // The chip's factor x sin(phi) + y cos(phi) = R sin(phi + psi): largest at
-    // phi = pi/2 - psi (+ 2 pi k), zero at -psi (+ pi k).
-    const double R = s.feedShare.norm(), psi = std::atan2(s.feedShare.y(), s.feedShare.x());
+    const double R = shares[k].R, psi = shares[k].psi;
     for (const auto& arc : s.arcs) {
       const double top = std::remainder(0.5 * kPi - psi - arc[0], 2.0 * kPi);
       const double sinMax = (top >= 0.0 ? top : top + 2.0 * kPi) <= arc[1] - arc[0]
@@ -210,16 +218,15 @@ StepLoad cuttingLoad(const EdgeEngagement& e, const Material& material, const Te
   for (int m = 0; m < kRotationSamples; ++m) {
     Sample& sm = samples[static_cast<std::size_t>(m)];
     const double theta = pitch * m / kRotationSamples;
-    for (const EdgeSlice& s : slices) {
+    for (std::size_t k = 0; k < slices.size(); ++k) {
+      const EdgeSlice& s = slices[k];
       const Edge q = edgeOf(s);
       const double sk = std::sin(q.kappa);
       for (int j = 0; j < N; ++j) {
         double phi = std::fmod(theta + j * pitch - s.z * lagPerMm, 2.0 * kPi);
         if (phi < 0.0) phi += 2.0 * kPi;
         if (!engaged(s, phi)) continue;
-        const double h =
-            fz * std::max(0.0, s.feedShare.x() * std::sin(phi) + s.feedShare.y() * std::cos(phi)) *
-            sk;
+        const double h = fz * std::max(0.0, shares[k].R * std::sin(phi + shares[k].psi)) * sk;
         sm.add(q.length, element(material, h), directions(phi, q.kappa));
       }
     }

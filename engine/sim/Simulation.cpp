@@ -381,12 +381,15 @@ StepContact measureContact(const Move& m, const StepPath& sp, double dtSeconds, 
   // (of even time): a ball's centre, about which the axis's turn moves the ball along its own
   // sphere, cutting nothing.
   Eigen::Vector3d travel = sp.end - sp.at(std::max(0.0, 1.0 - 1e-3));
-  if (sp.turning() && sp.points.size() >= 2) {
+  // While the axis turns: the tip's motion and the axis's turn over that last piece.
+  const bool turning = sp.turning() && sp.points.size() >= 2;
+  Eigen::Vector3d tipMove = Eigen::Vector3d::Zero(), axisTurn = Eigen::Vector3d::Zero();
+  if (turning) {
     const std::size_t n = sp.points.size();
     const double pieces = static_cast<double>(n - 1);
-    travel =
-        sp.points[n - 1] - sp.points[n - 2] +
-        cutter.parameters().cornerCenterHeight * (sp.axisEnd - sp.axisAt((pieces - 1.0) / pieces));
+    tipMove = sp.points[n - 1] - sp.points[n - 2];
+    axisTurn = sp.axisEnd - sp.axisAt((pieces - 1.0) / pieces);
+    travel = tipMove + cutter.parameters().cornerCenterHeight * axisTurn;
     if (dtSeconds > 0.0) c.feed = travel.norm() / (dtSeconds / 60.0 / pieces);
   }
   const Eigen::Matrix3d toPart = sp.toolToPart();
@@ -400,16 +403,12 @@ StepContact measureContact(const Move& m, const StepPath& sp, double dtSeconds, 
   c.edge = measureEngagement(stock, cutter, sp.end, d.head<2>(), c.rpm >= 0.0,
                              std::min(cutter.height(), rem.top + h), toolCurvature(m, sp),
                              afterStep, toPart);
-  if (sp.turning() && sp.points.size() >= 2 && d.head<2>().norm() > 0.0) {
+  if (turning && d.head<2>().norm() > 0.0) {
     // Each slice's own motion over the last piece (the point on the axis at its height),
     // across the axis, against the travel the step's f_z is taken from.
-    const std::size_t n = sp.points.size();
-    const double pieces = static_cast<double>(n - 1);
-    const Eigen::Vector3d before = sp.axisAt((pieces - 1.0) / pieces);
     const double across = d.head<2>().norm();
     for (EdgeSlice& s : c.edge.slices) {
-      const Eigen::Vector3d own =
-          toPart.transpose() * (sp.points[n - 1] - sp.points[n - 2] + s.z * (sp.axisEnd - before));
+      const Eigen::Vector3d own = toPart.transpose() * (tipMove + s.z * axisTurn);
       s.feedShare =
           Eigen::Vector2d(own.head<2>().dot(c.edge.feed), own.head<2>().dot(c.edge.side)) / across;
     }

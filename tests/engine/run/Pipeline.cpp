@@ -14,6 +14,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -373,10 +374,7 @@ TEST_CASE("a schedule to a chip thickness target holds it when re-simulated", "[
   o["out"] = (dir.path() / "out").string();
   const RunResult r = runJob(makeJob(JobCommand::Schedule, o));
   REQUIRE_FALSE(r.refed.empty());
-  std::size_t chip = 0;
-  for (const Binding b : r.plan.binding)
-    chip += b == Binding::Chip;
-  CHECK(chip > 50);
+  CHECK(std::count(r.plan.binding.begin(), r.plan.binding.end(), Binding::Chip) > 50);
   // The re-fed program, simulated again: every step within the target (the feed levels are
   // rounded down, F (1 + 5 %)^k: at most 5 % below it where the chip limit binds; 1 % above
   // for the measurement's noise), and within 5 % of it on the straight parts.
@@ -417,10 +415,7 @@ TEST_CASE("a 4th-axis wrap re-fed in inverse time holds its chip limit", "[run][
                     {"out", (dir.path() / "out").string()}};
   const RunResult r = runJob(makeJob(JobCommand::Schedule, o));
   REQUIRE_FALSE(r.refed.empty());
-  std::size_t chip = 0;
-  for (const Binding b : r.plan.binding)
-    chip += b == Binding::Chip;
-  CHECK(chip > 50);
+  CHECK(std::count(r.plan.binding.begin(), r.plan.binding.end(), Binding::Chip) > 50);
   // Re-simulated: the chip within the limit (1 % for the measurement's noise), the same
   // removal (the same swept path in other steps: to the cell's rounding, 0.1 %).
   REQUIRE(r.verified.done);
