@@ -436,7 +436,8 @@ double Sweep::turningDistance(const Eigen::Vector3d& p, Eigen::Vector3d* gradien
       (closestOnSegment(p, middle0_, middle1_) - p).norm() - middleSpread_ - reach_;
   if (bound > band) return bound;
   double best = 1.0;
-  const double d = sampled(p, best, band, std::isinf(within) ? -within : -band);
+  const double known[2] = {atStart, atEnd};
+  const double d = sampled(p, best, band, std::isinf(within) ? -within : -band, known);
   if (std::isnan(best)) return d;  // (beyond the band: the sign is what counts)
   if (closest) *closest = best;
   if (std::abs(d) > within) return d;  // (no gradient wanted)
@@ -767,7 +768,7 @@ double Sweep::facesInFrame(const Eigen::Vector3d& p, double radius, Eigen::Vecto
 }
 
 double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter, double looseBeyond,
-                      double insideBelow) const {
+                      double insideBelow, const double* ends) const {
   auto f = [&](double u) { return instance(p, u); };
   // The best of the candidates (value, parameter) seen so far.
   double bestValue = 0.0;
@@ -814,22 +815,36 @@ double Sweep::sampled(const Eigen::Vector3d& p, double& bestParameter, double lo
     return bestValue;
   }
   std::size_t best = 0;
+  // No point of the cutter moves further than gap_ between two samples (turning_), and the
+  // distance to it changes no more: between samples i and i + 1, where the tool has gone x of
+  // gap_ from i, the distance is at least v_i - x and v_(i+1) - (gap_ - x), so at least
+  // (v_i + v_(i+1) - gap_) / 2. The least of those is a bound from below on the whole step.
+  double lower = std::numeric_limits<double>::infinity(), last = 0.0;
   for (std::size_t i = 0; i < samples_.size(); ++i) {
-    const double v = turning_ ? alongAxis(cutter_, p - sampleTips_[i], sampleAxes_[i])
-                              : cutter_.signedDistance(p - sampleTips_[i]);
+    const double v = !turning_        ? cutter_.signedDistance(p - sampleTips_[i])
+                     : i == 0 && ends ? ends[0]
+                     : i + 1 == samples_.size() && ends
+                         ? ends[1]
+                         : alongAxis(cutter_, p - sampleTips_[i], sampleAxes_[i]);
     if (!any || v < bestValue) best = i;
     consider(samples_[i], v);
+    if (i > 0) lower = std::min(lower, 0.5 * (last + v - gap_));
+    last = v;
   }
   if (bestValue < insideBelow) {  // inside by more than that: the minimum is lower still
     bestParameter = std::numeric_limits<double>::quiet_NaN();
     return bestValue;
   }
-  // No point of the cutter moves further than gap_ between two samples: beyond the surface by
-  // more than that (and looseBeyond) their minimum, less gap_ outside, has the swept
-  // distance's sign.
-  if (std::abs(bestValue) > looseBeyond + gap_) {
+  // Beyond the surface by more than looseBeyond the bound has the swept distance's sign (and
+  // inside, the samples' minimum: the swept distance is no higher).
+  const double outside = turning_ ? lower : bestValue - gap_;
+  if (outside > looseBeyond) {
     bestParameter = std::numeric_limits<double>::quiet_NaN();
-    return bestValue > 0.0 ? bestValue - gap_ : bestValue;
+    return outside;
+  }
+  if (bestValue < -(looseBeyond + gap_)) {
+    bestParameter = std::numeric_limits<double>::quiet_NaN();
+    return bestValue;
   }
   // Refine on the bracket around the best sample.
   golden(samples_[best > 0 ? best - 1 : 0], samples_[std::min(best + 1, samples_.size() - 1)], 12);

@@ -152,11 +152,12 @@ class Sweep {
   /// Minimum over the step of the cutter's distance; the minimising parameter in `best`. Where
   /// the samples' minimum lies further than `looseBeyond` (mm) from the surface, or below
   /// `insideBelow` (already inside by that much: the minimum is no higher), it is returned
-  /// unrefined (outside, less how far the cutter moves between samples: a bound of the right
-  /// sign) and `best` is NaN.
+  /// unrefined (outside, a bound from below from how far the cutter moves between samples)
+  /// and `best` is NaN. `ends`, where given, holds the first and last samples' distances.
   double sampled(const Eigen::Vector3d& p, double& best,
                  double looseBeyond = std::numeric_limits<double>::infinity(),
-                 double insideBelow = -std::numeric_limits<double>::infinity()) const;
+                 double insideBelow = -std::numeric_limits<double>::infinity(),
+                 const double* ends = nullptr) const;
   /// XY distance from p to a height-keeping step's path, with its gradient (unit, or zero
   /// on the path) and the curvature of its level line through p, 1/mm (its second
   /// derivative across the gradient: 0 beside a line, +-1/distance about a point or an arc's
