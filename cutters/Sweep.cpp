@@ -355,7 +355,27 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
     Box3 box{Eigen::Vector3d::Constant(1e300), Eigen::Vector3d::Constant(-1e300)};
     for (std::size_t i = 0; i < samples_.size(); ++i)
       holdCylinder(box, sampleTips_[i], sampleAxes_[i], cutter_.maxRadius(), cutter_.height());
-    const double gap = length / static_cast<double>(samples_.size() - 1);
+    // Between samples i and i + 1 a point of the cutter moves no further than the tip's path
+    // between them (piecewise straight in u: exact at the polyline's points) plus its reach
+    // times the axis's turn (the axis turns on one great circle between two samples).
+    double gap = 0.0;
+    for (std::size_t i = 0; i + 1 < samples_.size(); ++i) {
+      double tipPath = 0.0;
+      Eigen::Vector3d from = sampleTips_[i];
+      if (path_.kind == StepPath::Kind::Polyline) {
+        const double pieces = static_cast<double>(path_.points.size() - 1);
+        for (std::size_t j = 1; j + 1 < path_.points.size(); ++j) {
+          const double uj = static_cast<double>(j) / pieces;
+          if (uj <= samples_[i] || uj >= samples_[i + 1]) continue;
+          tipPath += (path_.points[j] - from).norm();
+          from = path_.points[j];
+        }
+      }
+      tipPath += (sampleTips_[i + 1] - from).norm();
+      gap = std::max(
+          gap, tipPath + reachAll * std::acos(std::clamp(sampleAxes_[i].dot(sampleAxes_[i + 1]),
+                                                         -1.0, 1.0)));
+    }
     gap_ = gap;
     box.min -= Eigen::Vector3d::Constant(gap);
     box.max += Eigen::Vector3d::Constant(gap);
