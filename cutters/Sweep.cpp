@@ -173,11 +173,29 @@ Eigen::Matrix3d StepPath::toolToPart() const {
 
 Eigen::Vector3d StepPath::axisAt(double u) const {
   u = std::clamp(u, 0.0, 1.0);
+  if (axes.size() >= 2) {
+    const std::size_t pieces = axes.size() - 1;
+    const double at = u * static_cast<double>(pieces);
+    const std::size_t i = std::min(pieces - 1, static_cast<std::size_t>(at));
+    const double t = at - static_cast<double>(i);
+    return ((1.0 - t) * axes[i] + t * axes[i + 1]).normalized();
+  }
   const double angle = std::acos(std::clamp(axisStart.dot(axisEnd), -1.0, 1.0));
   if (angle < 1e-12) return axisStart;
   const double sinAngle = std::sin(angle);
   return ((std::sin((1.0 - u) * angle) * axisStart + std::sin(u * angle) * axisEnd) / sinAngle)
       .normalized();
+}
+
+double StepPath::turnRad() const {
+  auto angle = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return std::acos(std::clamp(a.dot(b), -1.0, 1.0));
+  };
+  if (axes.size() < 2) return angle(axisStart, axisEnd);
+  double turn = 0.0;
+  for (std::size_t i = 1; i < axes.size(); ++i)
+    turn += angle(axes[i - 1], axes[i]);
+  return turn;
 }
 
 Eigen::Vector3d StepPath::at(double u) const {
@@ -315,7 +333,7 @@ Sweep::Sweep(const AptCutter& cutter, const StepPath& path, double resolution, d
   bounds_.max.z() = std::max(bounds_.min.z(), std::min(bounds_.max.z(), ceiling));
   // A turning tool's points move by the tip's travel plus their reach times the turn.
   const double reachAll = std::hypot(cutter_.maxRadius(), cutter_.height());
-  const double turn = std::acos(std::clamp(path.axisStart.dot(path.axisEnd), -1.0, 1.0));
+  const double turn = path.turnRad();
   if (turning_) length += reachAll * turn;
   travel_ = std::max(length, 1e-9);
   if (!flat_ && !convexLine_) {

@@ -44,9 +44,13 @@ struct StepPath {
   std::vector<Eigen::Vector3d> points;
   /// The tool's axis (unit, from the tip toward the spindle) at the step's start and end; +Z
   /// for a 3-axis machine. Between them it turns at a steady rate (spherical interpolation
-  /// over the step's parameter).
+  /// over the step's parameter), unless `axes` says otherwise.
   Eigen::Vector3d axisStart{0.0, 0.0, 1.0};
   Eigen::Vector3d axisEnd{0.0, 0.0, 1.0};
+  /// Polyline (optional): the axis at each of `points` (the kinematics' poses), blended
+  /// between them: rotary axes turning together move the tool's axis off the great circle
+  /// through its ends (C turning at a tilt sweeps a cone).
+  std::vector<Eigen::Vector3d> axes;
 
   /// Whether the tool's axis is anything but +Z on the step.
   bool tilted() const;
@@ -58,6 +62,8 @@ struct StepPath {
   Eigen::Matrix3d toolToPart() const;
   /// The tool's axis at parameter u in [0, 1].
   Eigen::Vector3d axisAt(double u) const;
+  /// The angle the axis turns through over the step, radians (along `axes` where given).
+  double turnRad() const;
   /// The tip's path length, mm (a helix's with its rise).
   double length() const;
   /// Tip position at parameter u in [0, 1] (arc length fraction for lines and arcs).

@@ -97,6 +97,7 @@ StepPath stepPath(const Move& m, double t0, double t1, const Kinematics& k,
     const double t = t0 + (t1 - t0) * i / kPieces;
     const ToolPose pose = movePose(m, k, frame, pointAt(m, t), rotaryAt(m, t));
     q.points.push_back(pose.tip);
+    q.axes.push_back(pose.axis);
     if (i == 0) q.axisStart = pose.axis;
     if (i == kPieces) q.axisEnd = pose.axis;
   }
