@@ -292,6 +292,24 @@ Kinematics headAtBallCentre() {
   return k;
 }
 
+/// The column references' machines, both with tip control: a table-ac trunnion about (15, 15,
+/// -20) with its C 15 mm above A, and a head-bc whose pivot is 150 mm up the tool.
+Kinematics tcpTrunnion() {
+  Kinematics k;
+  k.type = Kinematics::Type::TableAC;
+  k.tcp = true;
+  k.rotPoint = {15, 15, -20};
+  k.offset = {0, 0, 15};
+  return k;
+}
+Kinematics tcpHead() {
+  Kinematics k;
+  k.type = Kinematics::Type::HeadBC;
+  k.tcp = true;
+  k.pivotLength = 150.0;
+  return k;
+}
+
 /// Each source line's removal, mm^3 (index: the line).
 std::vector<double> removedByLine(const SimulationResult& r) {
   std::vector<double> byLine;
@@ -786,14 +804,7 @@ TEST_CASE(
   // 5e-6 of it). Measured: moves of 1 mm^3 or more within 0.04 % but one (a 1.7 mm^3 move 0.22 %
   // low, 0.004 mm^3), totals within 0.023 %. Bounds, the issue's: each move of 1 mm^3 or more
   // within 1 %, the totals within 0.1 %; smaller moves within two cells' volume.
-  Kinematics trunnion, head;
-  trunnion.type = Kinematics::Type::TableAC;
-  trunnion.tcp = true;
-  trunnion.rotPoint = {15, 15, -20};
-  trunnion.offset = {0, 0, 15};
-  head.type = Kinematics::Type::HeadBC;
-  head.tcp = true;
-  head.pivotLength = 150.0;
+  const Kinematics trunnion = tcpTrunnion(), head = tcpHead();
   const double r = 3.0, h = 0.25;
   Box3 b;
   b.min = {0, 0, -10};
@@ -846,14 +857,7 @@ namespace {
 /// mm apart moved no move by more than 0.007 %.
 void checkTiltedFlatPrograms(bool held, const ReferenceBounds& bounds, int unmet = -1,
                              const ReferenceBounds& unmetBounds = {}) {
-  Kinematics trunnion, head;
-  trunnion.type = Kinematics::Type::TableAC;
-  trunnion.tcp = true;
-  trunnion.rotPoint = {15, 15, -20};
-  trunnion.offset = {0, 0, 15};
-  head.type = Kinematics::Type::HeadBC;
-  head.tcp = true;
-  head.pivotLength = 150.0;
+  const Kinematics trunnion = tcpTrunnion(), head = tcpHead();
   const double r = 3.0, l = 18.0, h = 0.25;
   Box3 b;
   b.min = {0, 0, -10};
