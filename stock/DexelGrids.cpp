@@ -25,7 +25,9 @@ namespace {
 /// 2026-11-28, metadata dexel_layout): x = i, y = j / 8 + n ny8, z = j % 8 (ny8 = ny / 8 rounded
 /// up), so that each 8^3 leaf holds 8 x 64 rays' n-th intervals, full where they have one (a
 /// fine grid's rays hold one interval or two: at (i, j, n), layout 1, a leaf held 64 rays'
-/// eight intervals, an eighth of it used, 194 MB a grid for 3 million rays).
+/// eight intervals, an eighth of it used, 194 MB a grid for 3 million rays). Layout 3 (since
+/// 2026-12-08): layout 2's places, and a leaf of first intervals all alike may be one tile (an
+/// uncut board's leaves: 12 million rays' grids went from 288 MB to a few).
 struct DexelLayout {
   int version = 2, ny8 = 0;
   DexelLayout(int v, int ny) : version(v), ny8((ny + 7) / 8) {}
@@ -50,7 +52,7 @@ struct DexelLayout {
 }  // namespace
 
 openvdb::GridPtrVec dexelGrids(const DexelStock& d, const openvdb::math::Transform& xf) {
-  const DexelLayout layout(2, d.raysY());
+  const DexelLayout layout(3, d.raysY());
   openvdb::DoubleGrid::Ptr g[4];
   const char* names[4] = {"dexel_z0", "dexel_z1", "dexel_f", "dexel_weight"};
   for (int k = 0; k < 4; ++k) {
@@ -68,18 +70,49 @@ openvdb::GridPtrVec dexelGrids(const DexelStock& d, const openvdb::math::Transfo
   lines->setTransform(xf.copy());
   lines->setName("dexel_line");
   auto line = lines->getAccessor();
-  for (int j = 0; j < d.raysY(); ++j)
-    for (int i = 0; i < d.raysX(); ++i) {
-      const auto& ray = d.ray(i, j);
-      for (std::size_t n = 0; n < ray.size(); ++n) {
-        const Coord c = layout.at(i, j, static_cast<int>(n));
-        z0.setValue(c, ray[n].z0);
-        z1.setValue(c, ray[n].z1);
-        f.setValue(c, ray[n].f);
-        if (ray[n].mx != 0.0f || ray[n].my != 0.0f)
-          line.setValue(c, openvdb::Vec3s(ray[n].mx, ray[n].my, 0.0f));
+  auto write = [&](int i, int j) {
+    const auto& ray = d.ray(i, j);
+    for (std::size_t n = 0; n < ray.size(); ++n) {
+      const Coord c = layout.at(i, j, static_cast<int>(n));
+      z0.setValue(c, ray[n].z0);
+      z1.setValue(c, ray[n].z1);
+      f.setValue(c, ray[n].f);
+      if (ray[n].mx != 0.0f || ray[n].my != 0.0f)
+        line.setValue(c, openvdb::Vec3s(ray[n].mx, ray[n].my, 0.0f));
+    }
+    if (d.weight(i, j) != 1.0) w.setValue(layout.at(i, j, 0), d.weight(i, j));
+  };
+  // The rays of one leaf of the first intervals (8 x 64 of them) that are all alike (one
+  // interval over the same heights, whole columns, no line: a stock's uncut or flat-floored
+  // areas, most of a fine grid) are one tile of each grid instead of a leaf of 512 values.
+  const int nx = d.raysX(), ny = d.raysY();
+  auto alike = [&](int i0, int j0) {
+    const auto& first = d.ray(i0, j0);
+    if (first.size() != 1 || first[0].mx != 0.0f || first[0].my != 0.0f) return false;
+    for (int j = j0; j < j0 + 64; ++j)
+      for (int i = i0; i < i0 + 8; ++i) {
+        const auto& ray = d.ray(i, j);
+        if (ray.size() != 1 || ray[0].z0 != first[0].z0 || ray[0].z1 != first[0].z1 ||
+            ray[0].f != first[0].f || ray[0].mx != 0.0f || ray[0].my != 0.0f ||
+            d.weight(i, j) != 1.0)
+          return false;
       }
-      if (d.weight(i, j) != 1.0) w.setValue(layout.at(i, j, 0), d.weight(i, j));
+    return true;
+  };
+  for (int j0 = 0; j0 < ny; j0 += 64)
+    for (int i0 = 0; i0 < nx; i0 += 8) {
+      // (A leaf wholly of first intervals: its 8 rows of j / 8 below ny8.)
+      if (i0 + 8 <= nx && j0 + 64 <= ny && j0 / 8 + 8 <= layout.ny8 && alike(i0, j0)) {
+        const auto& ray = d.ray(i0, j0);
+        const Coord origin = layout.at(i0, j0, 0);
+        g[0]->tree().addTile(1, origin, ray[0].z0, true);
+        g[1]->tree().addTile(1, origin, ray[0].z1, true);
+        g[2]->tree().addTile(1, origin, ray[0].f, true);
+        continue;
+      }
+      for (int j = j0; j < std::min(ny, j0 + 64); ++j)
+        for (int i = i0; i < std::min(nx, i0 + 8); ++i)
+          write(i, j);
     }
   g[0]->insertMeta("dexel_x0", openvdb::DoubleMetadata(d.originX()));
   g[0]->insertMeta("dexel_y0", openvdb::DoubleMetadata(d.originY()));
@@ -120,8 +153,9 @@ std::optional<DexelStock> exactDexels(const std::string& path, double h) {
       !(std::abs(spacing->value() - h) <= 1e-12 * h))
     return std::nullopt;
   const auto version = d[0]->getMetadata<openvdb::Int32Metadata>("dexel_layout");
-  if (version && version->value() != 2) return std::nullopt;  // (a layout of a later build)
-  const DexelLayout layout(version ? 2 : 1, ny->value());
+  if (version && version->value() != 2 && version->value() != 3)
+    return std::nullopt;  // (a layout of a later build)
+  const DexelLayout layout(version ? version->value() : 1, ny->value());
   const std::size_t count =
       static_cast<std::size_t>(nx->value()) * static_cast<std::size_t>(ny->value());
   std::vector<std::vector<DexelStock::Interval>> rays(count);
@@ -138,11 +172,17 @@ std::optional<DexelStock> exactDexels(const std::string& path, double h) {
   auto z1 = d[1]->getConstAccessor();
   auto f = d[2]->getConstAccessor();
   for (auto it = d[0]->cbeginValueOn(); it; ++it) {
-    const Coord c = it.getCoord();
-    if (!at(c)) return std::nullopt;
-    auto& ray = rayAt();
-    if (ray.size() <= static_cast<std::size_t>(n)) ray.resize(static_cast<std::size_t>(n) + 1);
-    ray[static_cast<std::size_t>(n)] = {*it, z1.getValue(c), f.getValue(c)};
+    // (A tile, layout 3: a leaf's rays alike, each of its voxels a ray's interval.)
+    const openvdb::CoordBBox box =
+        it.isVoxelValue() ? openvdb::CoordBBox(it.getCoord(), it.getCoord()) : it.getBoundingBox();
+    if (!it.isVoxelValue() && (layout.version != 3 || box.volume() != Leaf::SIZE))
+      return std::nullopt;
+    for (auto c = box.beginXYZ(); c; ++c) {
+      if (!at(*c)) return std::nullopt;
+      auto& ray = rayAt();
+      if (ray.size() <= static_cast<std::size_t>(n)) ray.resize(static_cast<std::size_t>(n) + 1);
+      ray[static_cast<std::size_t>(n)] = {*it, z1.getValue(*c), f.getValue(*c)};
+    }
   }
   if (lines)
     for (auto it = lines->cbeginValueOn(); it; ++it) {
@@ -287,6 +327,18 @@ FloatGrid::Ptr coarseDexelFractions(const DexelStock& d, int factor) {
 
 }  // namespace
 
+namespace {
+
+/// The least factor of 1, 2, 4, 8 that brings `band` voxels at the rays' cell within `budget`.
+int factorOfBand(double band, double budget) {
+  int c = 1;
+  while (c < 8 && band / (c * c) > budget)
+    c *= 2;
+  return c;
+}
+
+}  // namespace
+
 int VoxelStock::dexelFileFactor(const DexelStock& d, double bandVoxels) {
   const double h = d.resolution();
   double zLow = 0.0, zHigh = 0.0;
@@ -301,16 +353,23 @@ int VoxelStock::dexelFileFactor(const DexelStock& d, double bandVoxels) {
         partial += 2.0 + (iv.f < 1.0 ? (iv.z1 - iv.z0) / h : 0.0);
       if (!ray.empty() && d.weight(i, j) < 1.0) partial += (ray.back().z1 - ray.front().z0) / h;
     }
-  const double band = 7.0 * (2.0 * (x * y + y * z + z * x) + partial);
-  int c = 1;
-  while (c < 8 && band / (c * c) > bandVoxels)
-    c *= 2;
-  return c;
+  return factorOfBand(7.0 * (2.0 * (x * y + y * z + z * x) + partial), bandVoxels);
+}
+
+int VoxelStock::dexelFileFactor(const Box3& box, double spacing, double bandVoxels) {
+  // The uncut box's rays: each one interval (two partial voxels), its faces.
+  const Eigen::Vector3d n = (box.max - box.min) / spacing;
+  const double x = std::ceil(n.x()) + 1.0, y = std::ceil(n.y()) + 1.0, z = n.z() + 1.0;
+  return factorOfBand(7.0 * (2.0 * (x * y + y * z + z * x) + 2.0 * (x - 1.0) * (y - 1.0)),
+                      bandVoxels);
 }
 
 void VoxelStock::writeDexelStockVdb(const DexelStock& rays, const std::string& path,
                                     double bandVoxels) {
-  const int factor = dexelFileFactor(rays, bandVoxels);
+  writeDexelStockVdbAt(rays, path, dexelFileFactor(rays, bandVoxels));
+}
+
+void VoxelStock::writeDexelStockVdbAt(const DexelStock& rays, const std::string& path, int factor) {
   if (factor == 1) {
     fromDexels(rays).writeStockVdb(path, &rays);
     return;

@@ -311,21 +311,49 @@ TriangleMesh mesh(const Lattice& L, const std::vector<Block>& blocks, const Used
 
 }  // namespace
 
-std::optional<TriangleMesh> heightfieldMesh(const DexelStock& stock, std::size_t maxTriangles,
-                                            double* cellSize) {
+std::optional<std::vector<TriangleMesh>> heightfieldMeshes(const DexelStock& stock,
+                                                           const std::vector<std::size_t>& budgets,
+                                                           std::vector<double>* cellSizes) {
   const std::optional<Heights> f = heights(stock);
   if (!f) return std::nullopt;
-  for (int s = 1;; s *= 2) {
-    const Lattice L = lattice(*f, s);
-    const double eps = maxTriangles == 0 ? kSameHeight : 0.1 * s * f->h;
-    const std::vector<Block> top = blocks(L, eps);
-    const Used used(L, top);
-    const bool last = L.w <= 2 && L.n <= 2;
-    if (maxTriangles == 0 || last || triangleCount(L, top, used) <= maxTriangles) {
-      if (cellSize) *cellSize = s * f->h;
-      return mesh(L, top, used, f->floor);
+  std::vector<TriangleMesh> meshes(budgets.size());
+  if (cellSizes) cellSizes->assign(budgets.size(), 0.0);
+  std::vector<bool> done(budgets.size(), false);
+  std::size_t left = budgets.size();
+  // Every ray, then every 2nd, 4th, ...: each budget meshed at the first spacing that fits it
+  // (a budget of 0 at every ray, only exactly planar blocks merged: a level of its own).
+  for (const bool exact : {true, false}) {
+    if (exact && std::find(budgets.begin(), budgets.end(), std::size_t{0}) == budgets.end())
+      continue;
+    for (int s = 1; left > 0; s *= 2) {
+      const Lattice L = lattice(*f, s);
+      const double eps = exact ? kSameHeight : 0.1 * s * f->h;
+      const std::vector<Block> top = blocks(L, eps);
+      const Used used(L, top);
+      const bool last = L.w <= 2 && L.n <= 2;
+      const std::size_t count = exact || last ? 0 : triangleCount(L, top, used);
+      for (std::size_t b = 0; b < budgets.size(); ++b) {
+        if (done[b] || (budgets[b] == 0) != exact || (!last && !exact && count > budgets[b]))
+          continue;
+        meshes[b] = mesh(L, top, used, f->floor);
+        if (cellSizes) (*cellSizes)[b] = s * f->h;
+        done[b] = true;
+        --left;
+      }
+      if (exact || last) break;
     }
   }
+  return meshes;
+}
+
+std::optional<TriangleMesh> heightfieldMesh(const DexelStock& stock, std::size_t maxTriangles,
+                                            double* cellSize) {
+  std::vector<double> cells;
+  std::optional<std::vector<TriangleMesh>> meshes =
+      heightfieldMeshes(stock, {maxTriangles}, &cells);
+  if (!meshes) return std::nullopt;
+  if (cellSize) *cellSize = cells[0];
+  return std::move(meshes->front());
 }
 
 }  // namespace engage

@@ -19,6 +19,7 @@
 
 #include <cstddef>
 #include <optional>
+#include <vector>
 
 namespace engage {
 
@@ -33,5 +34,12 @@ class DexelStock;
 /// voxels instead.
 std::optional<TriangleMesh> heightfieldMesh(const DexelStock& stock, std::size_t maxTriangles,
                                             double* cellSize = nullptr);
+
+/// heightfieldMesh for several budgets at once (the rays' heights and each spacing's blocks
+/// made once for all): the n-th mesh within about budgets[n] triangles, its spacing in
+/// (*cellSizes)[n].
+std::optional<std::vector<TriangleMesh>> heightfieldMeshes(
+    const DexelStock& stock, const std::vector<std::size_t>& budgets,
+    std::vector<double>* cellSizes = nullptr);
 
 }  // namespace engage

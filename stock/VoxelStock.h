@@ -72,8 +72,9 @@ class VoxelStock : public Stock {
   static std::optional<Box3> fileBounds(const std::string& path);
   /// The material grid "stock" of a stock.vdb holds as written: its fractions' sum times its
   /// voxels' volume, mm^3, at its own cell (a dexel run's coarser fractions as they are, not
-  /// its rays). Throws Error for a file that cannot be read or has no such float grid.
-  static double fileVolume(const std::string& path);
+  /// its rays); of another fraction grid with `grid` (removed.vdb's "removed"). Throws Error
+  /// for a file that cannot be read or has no such float grid.
+  static double fileVolume(const std::string& path, const std::string& grid = "stock");
   /// The same stock as dexels of spacing h: a dexel run's own rays where the file holds them
   /// at this spacing (writeStockVdb), exactly; else each column of the resampled voxels
   /// becomes a ray: a partial voxel whose fractions change mostly along z is a shorter piece
@@ -85,8 +86,15 @@ class VoxelStock : public Stock {
   /// overlaps. The volume is kept exactly (up to 32-bit floats).
   static VoxelStock fromDexels(const DexelStock& dexels);
   /// Write a dexel run's removed.vdb (grids "removed", "step", "mrr" as writeRemovedVdb) from
-  /// its capture log (DexelStock::captureRemoved(true) before the removals).
-  static void writeRemovedVdb(const DexelStock& dexels, const std::string& path);
+  /// its capture log (DexelStock::captureRemoved(true) before the removals). Where its voxels'
+  /// three values would exceed `values` (removedFileFactor), the voxels are 2, 4 or 8 times
+  /// the rays' spacing (a fine tool over a whole board): each the mean of the removal it
+  /// covers, the first step of its voxels and that step's MRR, metadata `coarser` the factor.
+  static void writeRemovedVdb(const DexelStock& dexels, const std::string& path,
+                              double values = kFileBandVoxels);
+  /// The factor (1, 2, 4 or 8) by which a removed.vdb of `voxels` voxels at its stock's cell is
+  /// made coarser so that its three values a voxel stay within `values`.
+  static int removedFileFactor(double voxels, double values = kFileBandVoxels);
 
   VoxelStock(VoxelStock&&) noexcept;
   VoxelStock& operator=(VoxelStock&&) noexcept;
@@ -123,7 +131,7 @@ class VoxelStock : public Stock {
   /// as a narrow-band level set, negative inside, 3 voxels each side) and grids "planes_0",
   /// "planes_1" (each partial voxel's planes, which fromVdb reads back). With `rays` (a
   /// dexel run, whose voxels these are: fromDexels), also its rays exactly: grids
-  /// "dexel_z0", "dexel_z1", "dexel_f" (double; the n-th interval of ray (i, j) at (i, j, n))
+  /// "dexel_z0", "dexel_z1", "dexel_f" (double; the n-th interval of ray (i, j), dexelGrids)
   /// and "dexel_weight" (columns covered in part), with the rays' origin, spacing and counts
   /// as metadata, which dexelsFromVdb reads back at the same spacing. Written to a temporary
   /// name and renamed when complete. Throws Error on I/O failure.
@@ -137,11 +145,16 @@ class VoxelStock : public Stock {
   /// as always, and a run from the file (fromVdb, dexelsFromVdb, fileBounds) reads them.
   static void writeDexelStockVdb(const DexelStock& rays, const std::string& path,
                                  double bandVoxels = kFileBandVoxels);
+  /// writeDexelStockVdb at a factor already known (dexelFileFactor: 1, 2, 4 or 8).
+  static void writeDexelStockVdbAt(const DexelStock& rays, const std::string& path, int factor);
   /// The factor (1, 2, 4 or 8) by which writeDexelStockVdb's fractions and surface are coarser
   /// than the rays: the least that keeps the surface's band, about 7 layers over the rays'
   /// box's faces and a voxel's face for each partial voxel (two for each interval, one for
   /// each cell height of a partly covered column), within bandVoxels.
   static int dexelFileFactor(const DexelStock& rays, double bandVoxels = kFileBandVoxels);
+  /// dexelFileFactor of a box's uncut rays of `spacing` (the least a dexel run's stock.vdb of
+  /// that box can have: its cuts only add to the band).
+  static int dexelFileFactor(const Box3& box, double spacing, double bandVoxels = kFileBandVoxels);
   /// Most voxels stock.vdb's level set may have (about 10 bytes each while it is made, 4 in the
   /// file): about 3 layers on each side of a surface of 330 mm^2 at 0.01 mm.
   static constexpr double kFileBandVoxels = 2e7;

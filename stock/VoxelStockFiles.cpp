@@ -564,12 +564,34 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
   return VoxelStock(std::move(impl));
 }
 
-void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
+int VoxelStock::removedFileFactor(double voxels, double values) {
+  int c = 1;
+  while (c < 8 && 3.0 * voxels / (c * c * c) > values)
+    c *= 2;
+  return c;
+}
+
+void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path, double values) {
   initVdb();
   const double h = d.resolution();
+  // Each voxel column's four dexel columns' losses (per voxel height) merged, then added into
+  // the file's voxels: at the rays' cell, or where the removed voxels' three values would
+  // exceed `values`, `factor` times coarser (their mean removal, first step and its MRR).
+  const ColumnFootprint corner(d);
+  const int nx = d.raysX(), ny = d.raysY();
+  double lostCells = 0.0;  // (about the voxels at the rays' cell: a voxel column has 4 rays)
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      if (const DexelStock::LostColumn* c = d.removedColumn(i, j))
+        lostCells += static_cast<double>(c->cells.size());
+  const int factor = removedFileFactor(lostCells, values);
+  const int shift = factor == 1 ? 0 : factor == 2 ? 1 : factor == 4 ? 2 : 3;
   auto make = [&](auto grid, const char* name) {
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(factor * h);
+    xf->postTranslate(openvdb::Vec3d(0.5 * (factor - 1) * h));  // (as boxFiltered)
+    grid->setTransform(xf);
     grid->setName(name);
+    if (factor > 1) grid->insertMeta("coarser", openvdb::Int32Metadata(factor));
     return grid;
   };
   FloatGrid::Ptr removed = make(FloatGrid::create(0.0f), "removed");
@@ -580,16 +602,52 @@ void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
   auto sacc = step->getAccessor();
   auto macc = mrr->getAccessor();
   const std::vector<double>& stepMrr = d.stepMrr();
-  // Each voxel column's four dexel columns' losses (per voxel height) merged, then its voxels
-  // written, once each (rather than each column's losses added into four voxels' values).
   struct Height {
     double removed = 0.0;
     int step = std::numeric_limits<int>::max();  // the first step to reach it
   };
-  const ColumnFootprint corner(d);
-  const int nx = d.raysX(), ny = d.raysY();
+  // One row of the file's voxels (y) at a time: x from a0, each column's heights from its k0.
+  struct Column {
+    int k0 = 0;
+    std::vector<Height> at;
+  };
+  const int a0 = corner.cx >> shift, na = ((corner.cx + nx) >> shift) - a0 + 1;
+  std::vector<Column> row(static_cast<std::size_t>(na));
+  const double share = 1.0 / (static_cast<double>(factor) * factor * factor);
+  auto flush = [&](int y) {
+    for (int a = 0; a < na; ++a) {
+      Column& column = row[static_cast<std::size_t>(a)];
+      for (std::size_t k = 0; k < column.at.size(); ++k) {
+        const Height& at = column.at[k];
+        if (at.step == std::numeric_limits<int>::max()) continue;
+        const Coord c(a0 + a, y, column.k0 + static_cast<int>(k));
+        racc.setValue(c, static_cast<float>(std::min(1.0, at.removed * share)));
+        sacc.setValue(c, at.step);
+        const auto s = static_cast<std::size_t>(at.step);
+        macc.setValue(c, static_cast<float>(s < stepMrr.size() ? stepMrr[s] : 0.0));
+      }
+      column.at.clear();
+    }
+  };
+  // Voxel (x, k) of the row, its column grown to reach it.
+  auto cell = [&](int x, int k) -> Height& {
+    Column& column = row[static_cast<std::size_t>(x)];
+    if (column.at.empty()) column.k0 = k;
+    if (k < column.k0) {
+      column.at.insert(column.at.begin(), static_cast<std::size_t>(column.k0 - k), Height{});
+      column.k0 = k;
+    }
+    const auto i = static_cast<std::size_t>(k - column.k0);
+    if (i >= column.at.size()) column.at.resize(i + 1);
+    return column.at[i];
+  };
   std::vector<Height> merged;
-  for (int b = 0; b <= ny; ++b)
+  int y = (corner.cy + 0) >> shift;
+  for (int b = 0; b <= ny; ++b) {
+    if (((corner.cy + b) >> shift) != y) {
+      flush(y);
+      y = (corner.cy + b) >> shift;
+    }
     for (int a = 0; a <= nx; ++a) {
       struct Part {
         const DexelStock::LostColumn* column;
@@ -597,10 +655,10 @@ void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
       } parts[4];
       int count = 0;
       int kLow = std::numeric_limits<int>::max(), kHigh = std::numeric_limits<int>::min();
-      corner.columnsOf(d, a, b, [&](int i, int j, double share) {
+      corner.columnsOf(d, a, b, [&](int i, int j, double inVoxel) {
         const DexelStock::LostColumn* c = d.removedColumn(i, j);
         if (!c || c->cells.empty()) return;
-        parts[count++] = {c, share};
+        parts[count++] = {c, inVoxel};
         kHigh = std::max(kHigh, c->top);
         kLow = std::min(kLow, c->top - static_cast<int>(c->cells.size()) + 1);
       });
@@ -616,16 +674,17 @@ void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path) {
           to.step = std::min(to.step, static_cast<int>(from.step));
         }
       }
+      const int x = ((corner.cx + a) >> shift) - a0;
       for (int k = kLow; k <= kHigh; ++k) {
         const Height& at = merged[static_cast<std::size_t>(k - kLow)];
         if (at.step == std::numeric_limits<int>::max()) continue;
-        const Coord c(corner.cx + a, corner.cy + b, k);
-        racc.setValue(c, static_cast<float>(std::min(1.0, at.removed)));
-        sacc.setValue(c, at.step);
-        const auto s = static_cast<std::size_t>(at.step);
-        macc.setValue(c, static_cast<float>(s < stepMrr.size() ? stepMrr[s] : 0.0));
+        Height& to = cell(x, k >> shift);
+        to.removed += std::min(1.0, at.removed);
+        to.step = std::min(to.step, at.step);
       }
     }
+  }
+  flush(y);
   writeVdb(path, openvdb::GridPtrVec{removed, step, mrr});
 }
 
@@ -665,18 +724,18 @@ std::optional<Box3> VoxelStock::fileBounds(const std::string& path) {
   }
 }
 
-double VoxelStock::fileVolume(const std::string& path) {
+double VoxelStock::fileVolume(const std::string& path, const std::string& name) {
   initVdb();
   FloatGrid::Ptr grid;
   try {
     openvdb::io::File file(path);
     file.open(false);
-    if (file.hasGrid("stock")) grid = openvdb::gridPtrCast<FloatGrid>(file.readGrid("stock"));
+    if (file.hasGrid(name)) grid = openvdb::gridPtrCast<FloatGrid>(file.readGrid(name));
     file.close();
   } catch (const openvdb::Exception& e) {
     throw Error("cannot read stock '" + path + "' as an OpenVDB file: " + e.what());
   }
-  if (!grid) throw Error("stock '" + path + "' has no float grid named 'stock'");
+  if (!grid) throw Error("stock '" + path + "' has no float grid named '" + name + "'");
   double sum = 0.0;
   for (auto it = grid->cbeginValueOn(); it; ++it)
     sum += static_cast<double>(*it) * static_cast<double>(it.getVoxelCount());

@@ -221,7 +221,10 @@ MemoryEstimate memoryEstimate(const Job& job, double stopAbove) {
     if (job.crossCheck) e.stocks += one(job.otherModel());
     if (job.scheduling()) e.stocks += one(job.stockModel);  // the re-fed program's re-simulation
     if (job.outputs == Job::Outputs::All)
-      e.outputs = job.stockModel == StockModel::Voxel ? one(StockModel::Voxel) : 160.0 * rays;
+      e.outputs =
+          job.stockModel == StockModel::Voxel
+              ? one(StockModel::Voxel)
+              : (VoxelStock::dexelFileFactor(*job.stock.box, job.voxel) > 1 ? 60.0 : 160.0) * rays;
   }
   return e;
 }

@@ -106,9 +106,10 @@ struct MemoryEstimate {
 /// GB; 4.20 GB for tiger at 0.125 mm, peak 3.78 GB), or 100 bytes per dexel ray (the rays and
 /// their record of the removal: a 0.2 mm tool's PCB isolation over 12 million rays peaks at
 /// 1.3 GB with --outputs summary); the stock files and the report's view as much again for
-/// voxels and 160 bytes a ray for dexels (a grid whose stock.vdb is made through voxels at the
-/// rays' cell; that PCB run's, made at a coarser cell, peaks at 1.96 GB with all outputs, 53
-/// bytes a ray more). A mesh or stock.vdb stock counts the
+/// voxels and for dexels 160 bytes a ray where stock.vdb is made through voxels at the rays'
+/// cell, 60 where its box's faces alone ask for a coarser cell (VoxelStock::dexelFileFactor:
+/// that PCB run peaks at 1.63 GB with all outputs, 27 bytes a ray more; over 20 x 15 mm, 3
+/// million rays, 55). A mesh or stock.vdb stock counts the
 /// 64 MB only. A voxel stock's bound stops counting above `stopAbove` bytes (a cell far too fine is
 /// known to be too large before its leaves are all counted).
 MemoryEstimate memoryEstimate(const Job& job,

@@ -62,7 +62,8 @@ PlotSpec plotSpec(const RunResult& result, const std::filesystem::path& dir) {
 WrittenOutputs writeRunOutputs(const RunResult& result, const std::filesystem::path& dir) {
   WrittenOutputs w;
   const Job::Outputs which = result.job.outputs;
-  const StockView view(result);  // the stock as voxels, for its files and the 3D view
+  // The stock as voxels, for its files and the 3D view; stock.stl's and the view's surfaces.
+  const StockView view(result, {result.job.stlTriangles, kMaxTriangles});
   w.steps = which != Job::Outputs::Summary;
   // Row by row into the file, never whole in memory.
   auto writeTable = [&](const std::string& name, const std::vector<std::size_t>* rows) {

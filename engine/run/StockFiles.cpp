@@ -6,13 +6,15 @@
 
 #include <tbb/task_group.h>
 
+#include <algorithm>
 #include <array>
 #include <exception>
 #include <functional>
 
 namespace engage {
 
-StockView::StockView(const RunResult& result) : result_(result) {}
+StockView::StockView(const RunResult& result, std::vector<std::size_t> budgets)
+    : result_(result), budgets_(std::move(budgets)) {}
 StockView::~StockView() = default;
 
 const DexelStock* StockView::dexels() const {
@@ -30,9 +32,25 @@ const VoxelStock* StockView::voxels() const {
 }
 
 TriangleMesh StockView::surface(std::size_t maxTriangles, double* cell) const {
-  if (const DexelStock* d = dexels())
+  if (const DexelStock* d = dexels()) {
+    const auto asked = std::find(budgets_.begin(), budgets_.end(), maxTriangles);
+    if (asked != budgets_.end()) {
+      std::call_once(mesh_, [&] {
+        meshes_ = heightfieldMeshes(*d, budgets_, &cells_);
+        taken_.assign(budgets_.size(), false);
+      });
+      if (!meshes_) return voxels() ? voxels()->viewMesh(maxTriangles, cell) : TriangleMesh{};
+      const auto n = static_cast<std::size_t>(asked - budgets_.begin());
+      std::lock_guard<std::mutex> lock(take_);
+      if (!taken_[n]) {
+        taken_[n] = true;
+        if (cell) *cell = cells_[n];
+        return std::move((*meshes_)[n]);
+      }
+    }
     if (std::optional<TriangleMesh> mesh = heightfieldMesh(*d, maxTriangles, cell))
       return std::move(*mesh);
+  }
   const VoxelStock* v = voxels();
   if (!v) return {};
   return v->viewMesh(maxTriangles, cell);
@@ -85,8 +103,9 @@ std::size_t writeStockFiles(const RunResult& result, const StockView& view,
 
 void writeStockVdb(const StockView& view, const std::filesystem::path& dir) {
   // A dexel stock's grid too large for its surface at the rays' cell: straight from the rays.
-  if (const DexelStock* dexels = view.dexels(); dexels && VoxelStock::dexelFileFactor(*dexels) > 1)
-    return VoxelStock::writeDexelStockVdb(*dexels, (dir / "stock.vdb").string());
+  if (const DexelStock* dexels = view.dexels())
+    if (const int factor = VoxelStock::dexelFileFactor(*dexels); factor > 1)
+      return VoxelStock::writeDexelStockVdbAt(*dexels, (dir / "stock.vdb").string(), factor);
   if (const VoxelStock* shown = view.voxels())
     shown->writeStockVdb((dir / "stock.vdb").string(), view.dexels());
 }

@@ -15,6 +15,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <vector>
 
 namespace engage {
 
@@ -26,7 +27,9 @@ class VoxelStock;
 /// whichever thread asks first) and once for all the files and the report.
 class StockView {
  public:
-  explicit StockView(const RunResult& result);
+  /// `budgets`: the surfaces (triangle budgets) that will be asked for, made together where
+  /// they can be (a dexel heightfield's rays read once for all).
+  explicit StockView(const RunResult& result, std::vector<std::size_t> budgets = {});
   ~StockView();
   StockView(const StockView&) = delete;
   StockView& operator=(const StockView&) = delete;
@@ -38,13 +41,22 @@ class StockView {
   /// vertices' spacing: a dexel stock's straight from its rays where it is a heightfield
   /// (stock/DexelMesh.h: a tenth of a second where meshing its voxels takes seconds), else
   /// the voxels' (VoxelStock::viewMesh; with 0 their full surface). Safe from several
-  /// threads.
+  /// threads. The first call for one of the constructor's budgets makes them all, and each
+  /// is handed out once (a second call for it makes it again).
   TriangleMesh surface(std::size_t maxTriangles, double* cell = nullptr) const;
 
  private:
   const RunResult& result_;
+  const std::vector<std::size_t> budgets_;
   mutable std::unique_ptr<VoxelStock> converted_;
   mutable std::once_flag convert_;
+  // The budgets' heightfield meshes (none: not a dexel heightfield) and their cells, until
+  // taken.
+  mutable std::optional<std::vector<TriangleMesh>> meshes_;
+  mutable std::vector<double> cells_;
+  mutable std::vector<bool> taken_;
+  mutable std::once_flag mesh_;
+  mutable std::mutex take_;
 };
 
 /// Write the three files into `dir`, side by side on the cores there are, with `alongside()`

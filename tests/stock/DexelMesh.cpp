@@ -101,6 +101,24 @@ TEST_CASE("dexel mesh: within its budget, coarser where it must be", "[stock]") 
   CHECK(coarse->triangles.size() <= 300);
   CHECK(boundaryEdgeCount(*coarse) == 0);
   CHECK(meshVolume(*coarse) > 0.0);
+  // Several budgets at once (stock.stl's and the report's from one reading of the rays): each
+  // the mesh and spacing that budget alone gives, whatever their order.
+  std::vector<double> cells;
+  const auto both = heightfieldMeshes(s, {300, 0, 100000, 30}, &cells);
+  REQUIRE(both);
+  REQUIRE(both->size() == 4u);
+  const std::size_t budgets[4] = {300, 0, 100000, 30};
+  for (std::size_t n = 0; n < 4; ++n) {
+    double alone = 0.0;
+    const auto one = heightfieldMesh(s, budgets[n], &alone);
+    REQUIRE(one);
+    INFO("budget " << budgets[n]);
+    CHECK(cells[n] == alone);
+    CHECK((*both)[n].triangles == one->triangles);
+    CHECK((*both)[n].points == one->points);
+  }
+  CHECK(cells[1] == 0.5);
+  CHECK(cells[0] == 1.0);
 }
 
 TEST_CASE("dexel mesh: a slot cut at 30 deg encloses the stock's volume", "[stock]") {

@@ -577,6 +577,10 @@ TEST_CASE(
   CHECK(VoxelStock::dexelFileFactor(box, band / 4.0 - 1.0) == 4);  // band / 16 fits
   CHECK(VoxelStock::dexelFileFactor(box, band / 16.0 - 1.0) == 8);
   CHECK(VoxelStock::dexelFileFactor(box, 1.0) == 8);  // (8 at most)
+  // From the box alone (the memory estimate's, before any ray exists): the same band.
+  CHECK(VoxelStock::dexelFileFactor(b, h, band) == 1);
+  CHECK(VoxelStock::dexelFileFactor(b, h, band - 1.0) == 2);
+  CHECK(VoxelStock::dexelFileFactor(b, h, band / 16.0 - 1.0) == 8);
   // Written at factor 4 (band / 16 = 1294 fits 2000): 1 mm voxels whose centres lie at
   // 0.375 mm + k mm; the box's 81 mm^3 in 32-bit fractions (0.875 and 0.125 at its faces,
   // exact in binary); bounds as the voxels at h would have them, half a voxel (0.125 mm) out.
@@ -615,6 +619,88 @@ TEST_CASE(
   }
   std::filesystem::remove(coarse);
   std::filesystem::remove(fine);
+}
+
+TEST_CASE("a dexel stock.vdb's uncut blocks of rays are tiles, read back ray for ray",
+          "[stock][vdb]") {
+  // The stock.vdb tests' box (133 x 67 rays of 0.3 mm), cut only where rays of every block of
+  // 8 x 64 (a leaf of first intervals) are not: a 1 mm slot along its far side (y 19.3-20.3,
+  // rays 64 and on) and a ramp at x 2-8. The blocks at x 12-38 and y 0-19.2 are uncut: each
+  // is written as one tile a grid (layout 3), and every ray, in or out of them, must come back
+  // as it was, the cuts again removing what they remove from the stock itself; at each
+  // coarser factor the same.
+  DexelStock d = offLatticeBox();
+  const AptCutter c = AptCutter::flat(1.0, 6.0);
+  auto cuts = [&](Stock& s) {
+    double v = s.remove(Sweep(c, line({-2.0, 19.8, -0.5}, {42.0, 19.8, -0.5}), kRays)).volume;
+    v += s.remove(Sweep(c, line({2.0, 2.0, 0.2}, {8.0, 15.0, -1.3}), kRays)).volume;
+    return v;
+  };
+  REQUIRE(cuts(d) > 20.0);
+  // The same cuts again in the stock itself: what a stock read back exactly must remove too
+  // (6e-17 mm^3 of rounding here, not 0).
+  DexelStock again = d;
+  const double twice = cuts(again);
+  REQUIRE(twice < 1e-12);
+  const std::string path = tempVdb("dexel_tiles.vdb");
+  auto same = [&](const DexelStock& back) {
+    REQUIRE(back.raysX() == d.raysX());
+    REQUIRE(back.raysY() == d.raysY());
+    std::size_t differ = 0;
+    for (int j = 0; j < d.raysY(); ++j)
+      for (int i = 0; i < d.raysX(); ++i) {
+        const auto &a = d.ray(i, j), &r = back.ray(i, j);
+        bool alike = r.size() == a.size() && back.weight(i, j) == d.weight(i, j);
+        for (std::size_t n = 0; alike && n < a.size(); ++n)
+          alike = r[n].z0 == a[n].z0 && r[n].z1 == a[n].z1 && r[n].f == a[n].f &&
+                  r[n].mx == a[n].mx && r[n].my == a[n].my;
+        differ += alike ? 0 : 1;
+      }
+    CHECK(differ == 0);
+  };
+  VoxelStock::fromDexels(d).writeStockVdb(path, &d);
+  DexelStock back = VoxelStock::dexelsFromVdb(path, kRays);
+  same(back);
+  CHECK(cuts(back) == twice);
+  for (const int factor : {2, 8}) {
+    VoxelStock::writeDexelStockVdbAt(d, path, factor);
+    DexelStock coarse = VoxelStock::dexelsFromVdb(path, kRays);
+    same(coarse);
+    CHECK(cuts(coarse) == twice);
+  }
+  std::filesystem::remove(path);
+}
+
+TEST_CASE("a dexel run's removed.vdb holds the removed volume, coarser when it is large",
+          "[stock][vdb]") {
+  // removedFileFactor: the least of 1, 2, 4, 8 that keeps 3 values a voxel within the
+  // budget; by hand for 1000 voxels (3000 values).
+  CHECK(VoxelStock::removedFileFactor(1000.0, 3000.0) == 1);
+  CHECK(VoxelStock::removedFileFactor(1000.0, 2999.0) == 2);  // 375 values fit
+  CHECK(VoxelStock::removedFileFactor(1000.0, 374.0) == 4);   // 46.9 fit
+  CHECK(VoxelStock::removedFileFactor(1000.0, 46.0) == 8);
+  CHECK(VoxelStock::removedFileFactor(1000.0, 1.0) == 8);  // (8 at most)
+  // A slot and a ramp (as above) in the box's rays, the log captured: at each factor the file's
+  // grid "removed" sums (times its voxel's volume, (factor h)^3) to the volume removed, to its
+  // 32-bit floats; a voxel holding more than its own volume would be capped and lose some.
+  DexelStock d = offLatticeBox();
+  d.captureRemoved(true);
+  const double removed = slotAndRamp(d);
+  REQUIRE(removed > 400.0);
+  double cells = 0.0;  // the log's cells, which the factor is chosen by
+  for (int j = 0; j < d.raysY(); ++j)
+    for (int i = 0; i < d.raysX(); ++i)
+      if (const DexelStock::LostColumn* c = d.removedColumn(i, j))
+        cells += static_cast<double>(c->cells.size());
+  const std::string path = tempVdb("removed_coarse.vdb");
+  for (const int factor : {1, 2, 4, 8}) {
+    const double budget = 3.0 * cells / (factor * factor * factor);  // just fits this factor
+    REQUIRE(VoxelStock::removedFileFactor(cells, budget) == factor);
+    VoxelStock::writeRemovedVdb(d, path, budget);
+    INFO("factor " << factor);
+    CHECK(VoxelStock::fileVolume(path, "removed") == Approx(removed).epsilon(1e-5));
+  }
+  std::filesystem::remove(path);
 }
 
 TEST_CASE("a dexel run's stock.vdb of the first layout is still read ray for ray", "[stock][vdb]") {

@@ -474,6 +474,17 @@ TEST_CASE("a job's memory estimate follows its stock's closed-form bounds", "[ru
   e = memoryEstimate(makeJob(JobCommand::Simulate, v));
   CHECK(e.stocks == Approx(100 * 100.0));
   CHECK(e.outputs == Approx(100 * 160.0));
+  // A board whose stock.vdb is made at a coarser cell (its faces alone: 7 (2 (4001 x 3001 +
+  // 3001 x 161 + 161 x 4001) + 2 x 4000 x 3000) = 3.4e8 band voxels at 0.01 mm, over the 2e7
+  // of VoxelStock::kFileBandVoxels): 12 million rays, the files 60 bytes a ray (measured 27).
+  {
+    OptionValues board = v;
+    board["stock"] = "box:0,0,-1.6,40,30,0";
+    board["voxel"] = "0.01mm";
+    const MemoryEstimate b = memoryEstimate(makeJob(JobCommand::Simulate, board));
+    CHECK(b.stocks == Approx(12e6 * 100.0).epsilon(1e-3));  // (a ray more or less a side)
+    CHECK(b.outputs == Approx(12e6 * 60.0).epsilon(1e-3));
+  }
   // A cross-check holds both stocks.
   v["cross-check"] = "true";
   CHECK(memoryEstimate(makeJob(JobCommand::Simulate, v)).stocks == Approx(100 * 100.0 + voxels));
