@@ -162,8 +162,12 @@ class VoxelStock : public Stock {
   /// the fractions, at each voxel centre within 3 voxels of it: stock.vdb's grid "surface".
   std::vector<std::pair<Eigen::Vector3d, double>> surfaceBand() const;
   /// Write removed.vdb: grids "removed" (fraction removed), "step" (int32, first step) and
-  /// "mrr" (mm^3/min of that step). Requires captureRemoved(true) before the removals.
-  void writeRemovedVdb(const std::string& path) const;
+  /// "mrr" (mm^3/min of that step). Requires captureRemoved(true) before the removals. Where
+  /// the removed voxels' three values exceed `values` (removedFileFactor), 2, 4 or 8 times
+  /// coarser, as the dexel run's.
+  void writeRemovedVdb(const std::string& path, double values = kFileBandVoxels) const;
+  /// Voxels the removal's capture holds (removed.vdb's at the stock's cell; 0 without it).
+  std::size_t removedVoxels() const;
   /// The stock's surface (the 0.5 iso-surface of the fractions, outward normals) with at most
   /// about `maxTriangles` triangles: when the stock's own grid would give more, the fractions
   /// are averaged over blocks of 2, 4 or 8 voxels a side (at most 8: beyond that the budget is

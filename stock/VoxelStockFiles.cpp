@@ -564,6 +564,30 @@ VoxelStock VoxelStock::fromDexels(const DexelStock& d) {
   return VoxelStock(std::move(impl));
 }
 
+namespace {
+
+/// removed.vdb's three grids, their voxels `factor` times the stock's cell h (voxel I covering
+/// the stock's voxels factor I .. factor I + factor - 1, as boxFiltered), metadata `coarser`
+/// where factor > 1.
+struct RemovedGrids {
+  FloatGrid::Ptr removed = FloatGrid::create(0.0f), mrr = FloatGrid::create(0.0f);
+  Int32Grid::Ptr step = Int32Grid::create(-1);
+  RemovedGrids(double h, int factor) {
+    openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(factor * h);
+    xf->postTranslate(openvdb::Vec3d(0.5 * (factor - 1) * h));
+    const openvdb::GridBase::Ptr grids[3] = {removed, step, mrr};
+    const char* names[3] = {"removed", "step", "mrr"};
+    for (int k = 0; k < 3; ++k) {
+      grids[k]->setTransform(xf->copy());
+      grids[k]->setName(names[k]);
+      if (factor > 1) grids[k]->insertMeta("coarser", openvdb::Int32Metadata(factor));
+    }
+    removed->setGridClass(openvdb::GRID_FOG_VOLUME);
+  }
+};
+
+}  // namespace
+
 int VoxelStock::removedFileFactor(double voxels, double values) {
   int c = 1;
   while (c < 8 && 3.0 * voxels / (c * c * c) > values)
@@ -586,18 +610,9 @@ void VoxelStock::writeRemovedVdb(const DexelStock& d, const std::string& path, d
         lostCells += static_cast<double>(c->cells.size());
   const int factor = removedFileFactor(lostCells, values);
   const int shift = factor == 1 ? 0 : factor == 2 ? 1 : factor == 4 ? 2 : 3;
-  auto make = [&](auto grid, const char* name) {
-    openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(factor * h);
-    xf->postTranslate(openvdb::Vec3d(0.5 * (factor - 1) * h));  // (as boxFiltered)
-    grid->setTransform(xf);
-    grid->setName(name);
-    if (factor > 1) grid->insertMeta("coarser", openvdb::Int32Metadata(factor));
-    return grid;
-  };
-  FloatGrid::Ptr removed = make(FloatGrid::create(0.0f), "removed");
-  removed->setGridClass(openvdb::GRID_FOG_VOLUME);
-  Int32Grid::Ptr step = make(Int32Grid::create(-1), "step");
-  FloatGrid::Ptr mrr = make(FloatGrid::create(0.0f), "mrr");
+  const RemovedGrids file(h, factor);
+  FloatGrid::Ptr removed = file.removed, mrr = file.mrr;
+  Int32Grid::Ptr step = file.step;
   auto racc = removed->getAccessor();
   auto sacc = step->getAccessor();
   auto macc = mrr->getAccessor();
@@ -926,9 +941,57 @@ void VoxelStock::writeStockVdb(const std::string& path, const DexelStock* rays) 
   writeVdb(path, grids);
 }
 
-void VoxelStock::writeRemovedVdb(const std::string& path) const {
+std::size_t VoxelStock::removedVoxels() const {
+  return impl_->removed ? static_cast<std::size_t>(impl_->removed->activeVoxelCount()) : 0;
+}
+
+void VoxelStock::writeRemovedVdb(const std::string& path, double values) const {
   if (!impl_->removed) throw Error("removed.vdb needs captureRemoved(true) before the removals");
-  writeVdb(path, openvdb::GridPtrVec{impl_->removed, impl_->step, impl_->mrr});
+  const int factor = removedFileFactor(static_cast<double>(removedVoxels()), values);
+  if (factor == 1) {
+    writeVdb(path, openvdb::GridPtrVec{impl_->removed, impl_->step, impl_->mrr});
+    return;
+  }
+  // Leaf by leaf (a factor divides a leaf's 8: its coarse voxels are its own): each coarse
+  // voxel the mean removal of the voxels it covers, the first step among them and its MRR.
+  const int shift = factor == 2 ? 1 : factor == 4 ? 2 : 3, n = 8 >> shift;
+  const RemovedGrids file(impl_->h, factor);
+  auto racc = file.removed->getAccessor();
+  auto sacc = file.step->getAccessor();
+  auto macc = file.mrr->getAccessor();
+  const auto step = impl_->step->getConstAccessor();
+  const auto mrr = impl_->mrr->getConstAccessor();
+  const auto cells = static_cast<std::size_t>(n * n * n);
+  std::vector<double> sum(cells);
+  std::vector<int> first(cells);
+  std::vector<float> firstMrr(cells);
+  const double share = 1.0 / (static_cast<double>(factor) * factor * factor);
+  for (auto leaf = impl_->removed->tree().cbeginLeaf(); leaf; ++leaf) {
+    std::fill(sum.begin(), sum.end(), 0.0);
+    std::fill(first.begin(), first.end(), std::numeric_limits<int>::max());
+    for (auto v = leaf->cbeginValueOn(); v; ++v) {
+      const Coord c = v.getCoord(), l = Leaf::offsetToLocalCoord(v.pos());
+      const auto at = static_cast<std::size_t>(((l.x() >> shift) * n + (l.y() >> shift)) * n +
+                                               (l.z() >> shift));
+      sum[at] += static_cast<double>(*v);
+      if (const int s = step.getValue(c); s < first[at]) {
+        first[at] = s;
+        firstMrr[at] = mrr.getValue(c);
+      }
+    }
+    const Coord o = leaf->origin();
+    for (int x = 0; x < n; ++x)
+      for (int y = 0; y < n; ++y)
+        for (int z = 0; z < n; ++z) {
+          const auto at = static_cast<std::size_t>((x * n + y) * n + z);
+          if (first[at] == std::numeric_limits<int>::max()) continue;
+          const Coord c((o.x() >> shift) + x, (o.y() >> shift) + y, (o.z() >> shift) + z);
+          racc.setValue(c, static_cast<float>(std::min(1.0, sum[at] * share)));
+          sacc.setValue(c, first[at]);
+          macc.setValue(c, firstMrr[at]);
+        }
+  }
+  writeVdb(path, openvdb::GridPtrVec{file.removed, file.step, file.mrr});
 }
 
 }  // namespace engage

@@ -700,6 +700,22 @@ TEST_CASE("a dexel run's removed.vdb holds the removed volume, coarser when it i
     INFO("factor " << factor);
     CHECK(VoxelStock::fileVolume(path, "removed") == Approx(removed).epsilon(1e-5));
   }
+  // A voxel stock's removed.vdb (its capture grids, coarsened leaf by leaf) the same way.
+  Box3 b;  // (offLatticeBox's)
+  b.min = {0.05, 0.1, -10.0};
+  b.max = {40.0, 20.02, 0.0};
+  VoxelStock v = VoxelStock::box(b, kRays);
+  v.captureRemoved(true);
+  const double fromVoxels = slotAndRamp(v);
+  REQUIRE(fromVoxels > 400.0);
+  const double voxels = static_cast<double>(v.removedVoxels());
+  for (const int factor : {1, 2, 4, 8}) {
+    const double budget = 3.0 * voxels / (factor * factor * factor);
+    REQUIRE(VoxelStock::removedFileFactor(voxels, budget) == factor);
+    v.writeRemovedVdb(path, budget);
+    INFO("voxels, factor " << factor);
+    CHECK(VoxelStock::fileVolume(path, "removed") == Approx(fromVoxels).epsilon(1e-5));
+  }
   std::filesystem::remove(path);
 }
 
