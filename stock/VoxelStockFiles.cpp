@@ -900,7 +900,8 @@ void VoxelStock::writeStockVdb(const std::string& path, const DexelStock* rays) 
     surface = surfaceLevelSet(grid, h, 3, impl_->surfaceMesh()->points);
   } else {
     const FloatGrid::Ptr averaged = boxFiltered(grid, h, coarser);
-    surface = surfaceLevelSet(*averaged, coarser * h, 3, isoSurface(*averaged, 0.0).points);
+    std::vector<std::array<float, 3>> seeds = isoSurface(*averaged, 0.0).points;
+    surface = surfaceLevelSet(*averaged, coarser * h, 3, std::move(seeds));
   }
   // The partial voxels' planes (or the stock box's faces), for a run that goes on from here.
   openvdb::Vec3SGrid::Ptr planes[3];

@@ -207,7 +207,8 @@ int fileSurfaceFactor(const FloatGrid& grid) {
 /// The stock's surface as a narrow-band level set (negative inside, within `halfWidth` voxels
 /// of it) of the fractions' 0.5 iso-surface, by patches of surface carried out from it.
 /// Layer 0, the voxels with a face neighbour on the other side of 1/2 (looked for at the
-/// corners of the cells that the surface's mesh points, `points`, lie in): the plane normal to the
+/// corners of the cells that the surface's mesh points, `points`, lie in; `drop`, where given,
+/// owns them and is emptied once they are read): the plane normal to the
 /// fractions' gradient through the crossings on those edges (the fractions interpolated linearly
 /// along each; the crossings weighted by how square their edge is to the plane) gives the voxel's
 /// distance, and its foot and normal make a patch, a disc of radius 0.35 h. Then layer by
@@ -228,8 +229,11 @@ int fileSurfaceFactor(const FloatGrid& grid) {
 /// This is more exact and faster than OpenVDB's fast sweeping of a first guess or than meshing
 /// and re-voxelising (docs/voxel-stock.md). One function: its layers share the band's blocks and
 /// patches, and the propagation is the hot loop of writing stock.vdb.
-FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
-                               const std::vector<std::array<float, 3>>& points) {
+namespace {
+
+FloatGrid::Ptr levelSetFromPoints(const FloatGrid& grid, double h, int halfWidth,
+                                  const std::vector<std::array<float, 3>>& points,
+                                  std::vector<std::array<float, 3>>* drop) {
   const float width = static_cast<float>(halfWidth * h);
   const auto hf = static_cast<float>(h);
   // The distance from v (relative to a patch's centre) to the patch, a disc of radius 0.35 h
@@ -317,6 +321,7 @@ FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
       front.emplace_back(bi, o);
     }
   }
+  if (drop) std::vector<std::array<float, 3>>().swap(*drop);  // (`points` no longer read)
   // The layers out from the surface, until none hands on a patch within the band.
   Front next;
   // The 26 neighbours: their steps in voxels, in the block's offsets and in mm.
@@ -379,6 +384,11 @@ FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
     }
     front.swap(next);
   }
+  // (The patches and the fronts' room given back before the level set's leaves are made: on
+  // a board's coarse file 60 MB of the peak.)
+  Front().swap(front);
+  Front().swap(next);
+  std::vector<Patch>().swap(patches);
   // The level set: each block's voxels within the band, signed by the fractions' side.
   FloatGrid::Ptr surface = FloatGrid::create(width);
   surface->setTransform(grid.transform().copy());
@@ -399,6 +409,18 @@ FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
   surface->setName("surface");
   surface->setGridClass(openvdb::GRID_LEVEL_SET);
   return surface;
+}
+
+}  // namespace
+
+FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
+                               std::vector<std::array<float, 3>>&& points) {
+  return levelSetFromPoints(grid, h, halfWidth, points, &points);
+}
+
+FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
+                               const std::vector<std::array<float, 3>>& points) {
+  return levelSetFromPoints(grid, h, halfWidth, points, nullptr);
 }
 
 }  // namespace voxel
