@@ -89,7 +89,7 @@ openvdb::GridPtrVec dexelGrids(const DexelStock& d, const openvdb::math::Transfo
   const int nx = d.raysX(), ny = d.raysY();
   auto alike = [&](int i0, int j0) {
     const auto& first = d.ray(i0, j0);
-    if (first.size() != 1 || first[0].mx != 0.0f || first[0].my != 0.0f) return false;
+    if (first.size() != 1) return false;
     for (int j = j0; j < j0 + 64; ++j)
       for (int i = i0; i < i0 + 8; ++i) {
         const auto& ray = d.ray(i, j);

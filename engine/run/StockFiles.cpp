@@ -33,23 +33,25 @@ const VoxelStock* StockView::voxels() const {
 
 TriangleMesh StockView::surface(std::size_t maxTriangles, double* cell) const {
   if (const DexelStock* d = dexels()) {
+    bool heightfield = true;  // (until the budgets' meshes find it is not)
     const auto asked = std::find(budgets_.begin(), budgets_.end(), maxTriangles);
     if (asked != budgets_.end()) {
       std::call_once(mesh_, [&] {
         meshes_ = heightfieldMeshes(*d, budgets_, &cells_);
         taken_.assign(budgets_.size(), false);
       });
-      if (!meshes_) return voxels() ? voxels()->viewMesh(maxTriangles, cell) : TriangleMesh{};
+      heightfield = meshes_.has_value();
       const auto n = static_cast<std::size_t>(asked - budgets_.begin());
       std::lock_guard<std::mutex> lock(take_);
-      if (!taken_[n]) {
+      if (heightfield && !taken_[n]) {
         taken_[n] = true;
         if (cell) *cell = cells_[n];
         return std::move((*meshes_)[n]);
       }
     }
-    if (std::optional<TriangleMesh> mesh = heightfieldMesh(*d, maxTriangles, cell))
-      return std::move(*mesh);
+    if (heightfield)
+      if (std::optional<TriangleMesh> mesh = heightfieldMesh(*d, maxTriangles, cell))
+        return std::move(*mesh);
   }
   const VoxelStock* v = voxels();
   if (!v) return {};
