@@ -80,6 +80,7 @@ int gGroup(int g) {
     case G_43_1:
     case G_43_2:
     case G_43_4:
+    case G_43_5:
     case G_49:
     case G_234:
       return 8;

@@ -49,6 +49,7 @@ enum GCode : int {
   G_43_1 = 431,
   G_43_2 = 432,
   G_43_4 = 434,  ///< Fanuc: tool centre point control on (with H, as G43)
+  G_43_5 = 435,  ///< Fanuc: tool centre point control type 2 (the tool's axis as I, J, K)
   G_49 = 490,
   G_52 = 520,
   G_53 = 530,

@@ -98,7 +98,8 @@ std::string editLine(const std::string& text, const SourceBlock& block, const st
 /// back (rounded), so that incremental words and relative centres add up exactly.
 class PieceWriter {
  public:
-  explicit PieceWriter(const Move& m) : m_(m), u_(unitOf(m)), d_(coordinateDecimals(m)) {
+  PieceWriter(const Move& m, const Toolpath& path)
+      : m_(m), path_(path), u_(unitOf(m)), d_(coordinateDecimals(m)) {
     emitted_ = program(m.start);
     emittedRotary_ = m.rotaryStart;
   }
@@ -117,9 +118,19 @@ class PieceWriter {
       w += (w.empty() ? "" : " ") + std::string(1, kAxis[a]) +
            fmt(m_.incremental ? delta : end[a], d_);
     }
-    // The rotary axes the move turns, degrees, interpolated with X, Y, Z as the move is.
+    // The rotary axes the move turns, degrees, interpolated with X, Y, Z as the move is; under
+    // G43.5 the tool's axis they give, in the program's frame.
     static const char kRotary[3] = {'A', 'B', 'C'};
-    for (int a = 0; a < 3; ++a) {
+    if (m_.axisVector && turnsRotary(m_)) {
+      const Eigen::Vector3d abc =
+          last ? m_.rotaryEnd
+               : Eigen::Vector3d(m_.rotaryStart + t1 * (m_.rotaryEnd - m_.rotaryStart));
+      Eigen::Vector3d axis = path_.kinematics.axis(abc);
+      if (const FeatureFrame* f = path_.frameOf(m_)) axis = f->turn.transpose() * axis;
+      for (int a = 0; a < 3; ++a)
+        w += (w.empty() ? "" : " ") + std::string(1, "IJK"[a]) + fmt(axis[a], kAxisDecimals);
+    }
+    for (int a = 0; a < 3 && !m_.axisVector; ++a) {
       if (m_.rotaryStart[a] == m_.rotaryEnd[a]) continue;
       const double at = std::stod(fmt(
           last ? m_.rotaryEnd[a] : m_.rotaryStart[a] + t1 * (m_.rotaryEnd[a] - m_.rotaryStart[a]),
@@ -154,8 +165,11 @@ class PieceWriter {
 
   /// Degrees to 1e-7: 1.7e-7 mm of a point 100 mm from the axis.
   static constexpr int kRotaryDecimals = 7;
+  /// A unit axis's components to 1e-9: 1e-7 mm of a point 100 mm along it.
+  static constexpr int kAxisDecimals = 9;
 
   const Move& m_;
+  const Toolpath& path_;
   double u_;
   int d_;
   Eigen::Vector3d emitted_;
@@ -310,7 +324,7 @@ std::string writeProgram(const std::string& source, const Toolpath& path, const 
         } else {
           // Split a line or an arc where its feed changes.
           const auto& pieces = plan[feedMoves.front()];
-          PieceWriter writer(first);
+          PieceWriter writer(first, path);
           emitted.clear();
           double t0 = 0.0;
           for (std::size_t k = 0; k < pieces.size(); ++k) {

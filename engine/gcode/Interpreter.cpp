@@ -665,7 +665,7 @@ void Interpreter::modes(Words& w) {
   if (const auto g = w.gIn(8)) {
     // The spindle stays where it is: a longer tool puts the tip lower.
     const double previousLength = toolLength_;
-    if (*g == G_43 || *g == G_43_4 || *g == G_234) {
+    if (*g == G_43 || *g == G_43_4 || *g == G_43_5 || *g == G_234) {
       const int h = w.has('H') ? static_cast<int>(std::lround(w.get('H'))) : tool_;
       const auto it = toolLengths_.find(h);
       toolLength_ = it == toolLengths_.end() ? 0.0 : it->second;  // mm
@@ -728,8 +728,10 @@ bool Interpreter::executeBlock(const Block& b) {
              formatNumber(w.get('E')));
   // U and W of a lathe cycle shift its profile; they are not axes there.
   if (latheCycleLine) w.otherAxes = w.has('A') || w.has('B') || w.has('C') || w.has('V');
-  const bool axes =
-      w.has('X') || w.has('Y') || w.has('Z') || w.has('@') || w.has('^') || w.otherAxes;
+  // Under G43.5 the tool's axis I, J, K moves the rotary axes as their words would.
+  const bool axisWords = tcpVector_ && !g0 && (w.has('I') || w.has('J') || w.has('K'));
+  const bool axes = w.has('X') || w.has('Y') || w.has('Z') || w.has('@') || w.has('^') ||
+                    w.otherAxes || axisWords;
   // A rotary or UVW word moves its axis only where its target differs from the axis's
   // position (posts write "A0" on every line of 3-axis programs): only then is the move
   // marked. Axis words of G92, G10, G28 and the like set no position here.
@@ -754,6 +756,7 @@ bool Interpreter::executeBlock(const Block& b) {
     }
     at = to;
   }
+  if (tcpVector_ && !g0) toolVector(w, motionWord ? *motionWord : motion_);
   if (g0 && motionWord && axes && (*g0 == G_10 || *g0 == G_28 || *g0 == G_30 || *g0 == G_92))
     fail(w.gColumn(*g0), "expected either " + codeName('G', *g0) +
                              " or a motion on this line, found both using the axis words");
@@ -959,6 +962,7 @@ Move Interpreter::base(MoveKind kind) const {
   m.rotaryStart = out_.moves.empty() ? Eigen::Vector3d::Zero() : out_.moves.back().rotaryEnd;
   m.rotaryEnd = rotaryNow();
   m.tipHeld = tipHeld_;
+  m.axisVector = tcpVector_;
   m.frame = frame_;
   return m;
 }

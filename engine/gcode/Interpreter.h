@@ -237,6 +237,13 @@ class Interpreter final : public gcode::ParameterSource {
   /// G53.1: the rotary axes turned (a rapid, the joints still) so the tool points along the
   /// tilted plane's Z.
   void alignToPlane(int column);
+  /// G43.5 (Fanuc's tool centre point control type 2): the line's I, J, K (an omitted one 0)
+  /// are the tool's axis at its end, in the program's frame (the tilted plane's under G68.2),
+  /// and the rotary axes go to the chain's angles for it nearest the present ones. Rotary
+  /// words, arcs and cycles with I, J, K, Q (the tool's inclination) and P1 (tool posture
+  /// control) on the G43.5 line, and I, J, K on it on a machine that turns the table, are
+  /// refused at their column as the controller refuses them.
+  void toolVector(const Words& w, int mode);
 
   /// M98 P<program> [L<times>]: runs O<program> (in this program, or <program>.ngc beside
   /// it) until its M99, L times. With --dialect fanuc and no L, a P of more than four digits
@@ -448,7 +455,8 @@ class Interpreter final : public gcode::ParameterSource {
   int tool_ = 0;
   int preparedTool_ = 0;
   double toolLength_ = 0.0;
-  bool tcpCode_ = false;     ///< G43.4 or G234 in force (until G43, G43.1, G49)
+  bool tcpCode_ = false;     ///< G43.4, G43.5 or G234 in force (until G43, G43.1, G49)
+  bool tcpVector_ = false;   ///< G43.5 in force: I, J, K are the tool's axis
   bool dwo_ = false;         ///< G254 in force (until G255)
   std::uint32_t frame_ = 0;  ///< the tilted work plane in force: 1 + index in out_.frames
   bool tipHeld_ = false;     ///< pos_ is the tip on the part, not the joints (Move::tipHeld)

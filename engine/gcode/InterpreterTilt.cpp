@@ -1,7 +1,7 @@
-// Five-axis modes: tool centre point control (Fanuc G43.4, Haas G234, cancelled by G49 or G43),
-// Haas's dynamic work offset (G254, G255) and Fanuc's tilted work plane (G68.2, G53.1, G69).
-// Under any of them X, Y, Z are the tool tip on the part (Move::tipHeld); under G68.2 they are
-// in the plane's frame (Move::frame, Toolpath::frames).
+// Five-axis modes: tool centre point control (Fanuc G43.4, and G43.5 with the tool's axis as I,
+// J, K; Haas G234; cancelled by G49 or G43), Haas's dynamic work offset (G254, G255) and Fanuc's
+// tilted work plane (G68.2, G53.1, G69). Under any of them X, Y, Z are the tool tip on the part
+// (Move::tipHeld); under G68.2 they are in the plane's frame (Move::frame, Toolpath::frames).
 
 #include "engine/gcode/Interpreter.h"
 
@@ -29,7 +29,10 @@ void Interpreter::holdTip(bool held) {
 }
 
 void Interpreter::tipModes(const Words& w) {
-  if (const auto g = w.gIn(8)) tcpCode_ = *g == G_43_4 || *g == G_234;
+  if (const auto g = w.gIn(8)) {
+    tcpCode_ = *g == G_43_4 || *g == G_43_5 || *g == G_234;
+    tcpVector_ = *g == G_43_5;
+  }
   if (const auto g = w.gIn(23)) dwo_ = *g == G_254;
   const auto plane = w.gIn(16);
   if (frame_ != 0 && !(plane && *plane == G_69))
@@ -110,6 +113,66 @@ void Interpreter::alignToPlane(int column) {
   m.feed = 0.0;
   out_.moves.push_back(std::move(m));
   pos_ = f.turn.transpose() * (k.pose(joints - w0, *to, false).tip + w0 - f.origin);
+}
+
+void Interpreter::toolVector(const Words& w, int mode) {
+  for (const char a : {'A', 'B', 'C'})
+    if (w.has(a))
+      fail(w.column(a), std::string("expected the tool's axis as I, J, K under G43.5 (tool centre "
+                                    "point control type 2), found ") +
+                            a + formatNumber(w.get(a)));
+  if (w.hasG(G_43_5)) {
+    if (w.has('Q') && w.get('Q') != 0.0)
+      fail(w.column('Q'),
+           "expected no tool inclination with G43.5 (engage does not read Q: give the inclined "
+           "axis as I, J, K), found Q" +
+               formatNumber(w.get('Q')));
+    if (w.has('P') && w.get('P') != 0.0)
+      fail(w.column('P'),
+           "expected P0 (conventional control: the rotary axes turn evenly) with G43.5, found P" +
+               formatNumber(w.get('P')) + " (tool posture control)");
+  }
+  const char first = w.has('I') ? 'I' : w.has('J') ? 'J' : 'K';
+  if (!w.has(first)) return;  // (none: the axis stays)
+  const int column = w.column(first);
+  const bool rotary = options_.machine && options_.machine->kinematics.rotary();
+  // Fanuc's alarm PS5421: the G43.5 line itself takes I, J, K only where the head turns the
+  // tool.
+  if (rotary && w.hasG(G_43_5) && options_.machine->kinematics.type != Kinematics::Type::HeadBC)
+    fail(column, std::string("expected I, J, K on the G43.5 line only on a machine whose head "
+                             "turns the tool, found them on ") +
+                     kinematicsTypeName(options_.machine->kinematics.type) + " (" +
+                     options_.machine->name + ")");
+  if (mode != G_0 && mode != G_1)
+    fail(column,
+         "expected G0 or G1 with the tool's axis I, J, K under G43.5 (arcs take R), "
+         "found " +
+             codeName('G', mode));
+  Vector3d v(w.has('I') ? w.get('I') : 0.0, w.has('J') ? w.get('J') : 0.0,
+             w.has('K') ? w.get('K') : 0.0);
+  auto n = [](double x) { return formatNumber(std::abs(x) < 5e-13 ? 0.0 : x); };
+  const std::string given = "(" + n(v.x()) + ", " + n(v.y()) + ", " + n(v.z()) + ")";
+  if (!(v.norm() > 1e-9))
+    fail(column, "expected a tool axis I, J, K of some length, found " + given);
+  v.normalize();
+  if (frame_ != 0) v = out_.frames[frame_ - 1].turn * v;
+  if (!rotary) {
+    if ((v - Vector3d::UnitZ()).norm() <= 1e-9) return;
+    fail(column,
+         "expected the machine's rotary axes to turn the tool (a --machine file with "
+         "\"kinematics\"), found the tool's axis " +
+             given + " under G43.5");
+  }
+  const Kinematics& k = options_.machine->kinematics;
+  const std::optional<Vector3d> to = k.anglesFor(v, rotaryNow());
+  if (!to)
+    fail(column, std::string("expected a tool axis the rotary axes of ") +
+                     kinematicsTypeName(k.type) + " can reach, found " + given);
+  for (int a = 0; a < 3; ++a) {
+    double& at = otherAxisPosition_[static_cast<std::size_t>(a)];
+    if ((*to)[a] != at) otherAxes_ = true;
+    at = (*to)[a];
+  }
 }
 
 }  // namespace engage::gcode

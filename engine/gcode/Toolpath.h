@@ -81,6 +81,9 @@ struct Move {
   /// X, Y, Z are the tool tip on the part (tool centre point control: Fanuc G43.4, Haas G234,
   /// Haas G254, a tilted work plane), not the machine's joints; see Kinematics.h.
   bool tipHeld = false;
+  /// The program gives the tool's axis as I, J, K, not the rotary axes (Fanuc G43.5): a
+  /// writer splitting the move writes the axis.
+  bool axisVector = false;
   /// The tilted work plane the move was programmed in: 1 + its index in Toolpath::frames, 0
   /// for none.
   std::uint32_t frame = 0;

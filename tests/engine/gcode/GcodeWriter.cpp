@@ -211,6 +211,34 @@ TEST_CASE("moves that turn rotary axes: A/B/C at the split points, F scaled", "[
   }
 }
 
+TEST_CASE("under G43.5 the split points carry the tool's axis as I, J, K", "[gcode]") {
+  // A head-bc machine (axis (-sin B cos C, -sin B sin C, cos B)). The move turns the tool from
+  // +Z to (0, 0.5, sqrt(3)/2): B 0 -> 30, C 0 -> -90 (the nearer of B30 C-90 and B-30 C90, a
+  // tie, the first). Half way B15 C-45: (-sin 15 cos 45, sin 15 sin 45, cos 15) =
+  // (-0.1830127019, 0.1830127019, 0.9659258263); read back, the nearest angles for that axis
+  // are B15 C-45 again.
+  ReaderOptions o;
+  MachineSetup m;
+  m.name = "head.json";
+  m.kinematics.type = Kinematics::Type::HeadBC;
+  m.kinematics.pivotLength = 150.0;
+  o.machine = m;
+  const std::string src =
+      "G21 G90 G94\nG0 X0 Y0 Z5\nG43.5 H1\nG1 X10 J0.5 K0.866025403784439 F200\nG49\nM2\n";
+  const Toolpath t = readProgramText(src, "w5.ngc", o);
+  REQUIRE(t.moves.size() == 2);
+  FeedPlan plan = unchanged(t);
+  plan[1] = {{0.5, 1.0, 0.5}, {1.0, 1.0, 1.5}};
+  const std::string out = writeProgram(src, t, plan);
+  INFO(out);
+  CHECK_THAT(out, Contains("G1 X5 I-0.183012702 J0.183012702 K0.965925826 F100\n"
+                           "G1 X10 I0 J0.5 K0.866025404 F300\n"));
+  const Toolpath back = readProgramText(out, "w5.ngc", o);
+  REQUIRE(back.moves.size() == 3);
+  CHECK((back.moves[1].rotaryEnd - Eigen::Vector3d(0.0, 15.0, -45.0)).norm() < 1e-6);
+  CHECK((back.moves[2].rotaryEnd - t.moves[1].rotaryEnd).norm() < 1e-6);  // (9 digits written)
+}
+
 TEST_CASE("programs that do not run line by line cannot be re-fed in place", "[gcode]") {
   const std::string src = "G21 F100\no1 repeat [2]\nG91 G1 X1\no1 endrepeat\nM2\n";
   const Toolpath t = read(src);

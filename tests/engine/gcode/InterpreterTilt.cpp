@@ -198,3 +198,82 @@ TEST_CASE("an arc on a tilted plane stays on its circle in the plane", "[gcode]"
   checkNear(sp.points[4], {0.0, -9.0, 5.0});  // half way round, counter-clockwise seen from +z'
   checkNear(sp.axisEnd, {0.0, -1.0, 0.0});
 }
+
+TEST_CASE("G43.5's tool axis I, J, K turns the rotary axes as G43.4's angles do", "[gcode]") {
+  // Fanuc's tool centre point control type 2: the axis at each line's end, an omitted component
+  // 0, none at all: the axis stays. By hand, the chains' axes:
+  // - head-bc (-sin B cos C, -sin B sin C, cos B): (0, 0.5, sqrt(3)/2) is B30 C-90 or B-30 C90,
+  //   as far from B0 C0; the first, B30 C-90. Then (0.5, 0, sqrt(3)/2): B30 C-180 (90 deg of C
+  //   away) against B-30 C0 (150 away);
+  // - table-ac (sin A sin C, sin A cos C, cos A): A30 C0, then A30 C90.
+  const std::string axes =
+      "G1 X5 Y2 Z1 J0.5 K0.866025403784439 F300\nG1 X9 Y-1 I0.5 J0 K0.866025403784439\n"
+      "G1 X12\nG1 Z3 K1\n";
+  const std::pair<Kinematics::Type, std::string> cases[] = {
+      {Kinematics::Type::HeadBC,
+       "G1 X5 Y2 Z1 B30 C-90 F300\nG1 X9 Y-1 B30 C-180\nG1 X12\n"
+       "G1 Z3 B0\n"},
+      {Kinematics::Type::TableAC,
+       "G1 X5 Y2 Z1 A30 C0 F300\nG1 X9 Y-1 A30 C90\nG1 X12\n"
+       "G1 Z3 A0\n"}};
+  for (const auto& [type, angles] : cases) {
+    INFO(kinematicsTypeName(type));
+    const std::string head = "G21 G90\nG0 X0 Y0 Z40\n";
+    const Toolpath vector =
+        readProgramText(head + "G43.5 H1\n" + axes + "G49\nM2\n", "g435.ngc", onMachine(type));
+    const Toolpath turned =
+        readProgramText(head + "G43.4 H1\n" + angles + "G49\nM2\n", "g434.ngc", onMachine(type));
+    REQUIRE(vector.moves.size() == turned.moves.size());
+    for (std::size_t i = 0; i < vector.moves.size(); ++i) {
+      INFO("move " << i);
+      // (K to 15 digits: the angles to about 1e-12 deg)
+      checkNear(vector.moves[i].rotaryEnd, turned.moves[i].rotaryEnd, 1e-9);
+      const ToolPose a = poseAt(vector, vector.moves[i], true);
+      const ToolPose b = poseAt(turned, turned.moves[i], true);
+      checkNear(a.tip, b.tip);
+      checkNear(a.axis, b.axis);
+      CHECK(vector.moves[i].axisVector == (i >= 1));
+    }
+  }
+  // On a tilted plane the axis is the plane's: G68.2 J30 is Rx(30), whose (0, 0, 1) is the
+  // part's (0, -0.5, sqrt(3)/2); on the trunnion A-30 C0 (30 deg away) rather than A30 C180.
+  const Toolpath plane =
+      readProgramText("G21 G90\nG68.2 X0 Y0 Z0 I0 J30 K0\nG43.5 H1\nG1 X1 K1 F200\nG69\nM2\n",
+                      "plane35.ngc", onMachine(Kinematics::Type::TableAC));
+  checkNear(plane.moves.back().rotaryEnd, {-30.0, 0.0, 0.0}, 1e-9);
+  checkNear(poseAt(plane, plane.moves.back(), true).axis, {0.0, -0.5, std::sqrt(0.75)});
+}
+
+TEST_CASE("G43.5 words the controller refuses", "[gcode]") {
+  const ReaderOptions ac = onMachine(Kinematics::Type::TableAC);
+  const ReaderOptions head = onMachine(Kinematics::Type::HeadBC);
+  CHECK_THROWS_WITH(readProgramText("G21\nG43.5 H1\nG1 X1 A30 F100\nM2\n", "abc.ngc", ac),
+                    Contains("abc.ngc:3:7: expected the tool's axis as I, J, K under G43.5 (tool "
+                             "centre point control type 2), found A30"));
+  CHECK_THROWS_WITH(readProgramText("G21\nG43.5 H1 Q2\nM2\n", "q.ngc", head),
+                    Contains("q.ngc:2:10: expected no tool inclination with G43.5"));
+  CHECK_THROWS_WITH(readProgramText("G21\nG43.5 H1 P1\nM2\n", "p.ngc", head),
+                    Contains("p.ngc:2:10: expected P0 (conventional control: the rotary axes "
+                             "turn evenly) with G43.5, found P1 (tool posture control)"));
+  CHECK_THROWS_WITH(readProgramText("G21\nG43.5 H1\nG2 X2 I1 J0 F100\nM2\n", "arc.ngc", ac),
+                    Contains("arc.ngc:3:7: expected G0 or G1 with the tool's axis I, J, K under "
+                             "G43.5 (arcs take R), found G2"));
+  // Fanuc's PS5421: I, J, K on the G43.5 line only where the head turns the tool.
+  CHECK_THROWS_WITH(readProgramText("G21\nG43.5 H1 X0 Y0 Z5 J0.5 K0.8\nM2\n", "line.ngc", ac),
+                    Contains("line.ngc:2:19: expected I, J, K on the G43.5 line only on a machine "
+                             "whose head turns the tool, found them on table-ac (five.json)"));
+  CHECK_NOTHROW(readProgramText("G21\nG0 Z5\nG43.5 H1 X0 Y0 Z5 J0.5 K0.8\nM2\n", "h.ngc", head));
+  // A 4th axis about X cannot lean the tool along X.
+  CHECK_THROWS_WITH(
+      readProgramText("G21\nG43.5 H1\nG1 X1 I0.5 K0.8 F100\nM2\n", "reach.ngc",
+                      onMachine(Kinematics::Type::TableA)),
+      Contains("reach.ngc:3:7: expected a tool axis the rotary axes of table-a can reach, found "
+               "(0.5, 0, 0.8)"));
+  CHECK_THROWS_WITH(readProgramText("G21\nG43.5 H1\nG1 X1 I0 J0 K0 F100\nM2\n", "zero.ngc", ac),
+                    Contains("zero.ngc:3:7: expected a tool axis I, J, K of some length, found "
+                             "(0, 0, 0)"));
+  // Without rotary axes only the upright axis.
+  CHECK_NOTHROW(readProgramText("G21\nG43.5 H1\nG1 X1 K1 F100\nM2\n", "up.ngc", {}));
+  CHECK_THROWS_WITH(readProgramText("G21\nG43.5 H1\nG1 X1 J1 F100\nM2\n", "flat5.ngc", {}),
+                    Contains("flat5.ngc:3:7: expected the machine's rotary axes to turn the tool"));
+}
