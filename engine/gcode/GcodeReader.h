@@ -36,6 +36,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -64,6 +65,9 @@ struct MachineSetup {
   bool startInch = false;                ///< "startup_units": "in" (G20 at power-on)
   bool startUnitsGiven = false;          ///< the file says "startup_units"
   Eigen::Vector3d travelMin{0.0, 0.0, 0.0}, travelMax{0.0, 0.0, 0.0};
+  /// Degrees: the travel of the rotary axes A, B, C; infinite where the machine sets none.
+  Eigen::Vector3d rotaryMin = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+  Eigen::Vector3d rotaryMax = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   /// The kinematic chain ("kinematics"): which rotary axes turn the tool relative to the part.
   Kinematics kinematics;
 };

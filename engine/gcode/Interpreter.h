@@ -86,6 +86,8 @@ class Interpreter final : public gcode::ParameterSource {
   /// With a machine: every move within its travel, then moved from the machine's coordinates
   /// into G54's frame.
   void toWorkFrame(const MachineSetup& m);
+  /// A GcodeError at the move's line where it takes an axis beyond the machine's travel.
+  void checkTravel(const MachineSetup& m, const Move& move) const;
 
   // ParameterSource
   double numbered(int n) const override;

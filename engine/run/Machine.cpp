@@ -119,11 +119,18 @@ MachineSetup readMachine(const std::string& path) {
     const json& s = doc["start"];
     m.start = s == "g28" ? m.g28 : s == "g30" ? m.g30 : point(s, "start");
   }
-  if (doc.contains("travel")) {
-    const json& t = doc["travel"];
-    if (!t.is_object() || !t.contains("min") || !t.contains("max") || t.size() != 2)
-      throw Error(path + ": \"travel\" must be {\"min\": [x, y, z], \"max\": [x, y, z]}, found " +
-                  t.dump());
+  const json noTravel = json::object();
+  const json& t = doc.contains("travel") ? doc["travel"] : noTravel;
+  if (doc.contains("travel") &&
+      (!t.is_object() || t.empty() || t.contains("min") != t.contains("max")))
+    throw Error(path +
+                ": \"travel\" must be {\"min\": [x, y, z], \"max\": [x, y, z]} and, for rotary "
+                "axes, \"A\", \"B\", \"C\": [min, max] in degrees, found " +
+                t.dump());
+  for (const auto& [key, value] : t.items())
+    if (key != "min" && key != "max" && key != "A" && key != "B" && key != "C")
+      throw Error(path + ": \"travel\": unknown key \"" + key + "\" (expected min, max, A, B, C)");
+  if (t.contains("min")) {
     m.travelMin = point(t["min"], "travel.min");
     m.travelMax = point(t["max"], "travel.max");
     for (int a = 0; a < 3; ++a)
@@ -138,6 +145,29 @@ MachineSetup readMachine(const std::string& path) {
   }
   if (doc.contains("kinematics"))
     m.kinematics = readKinematics(path, doc["kinematics"], point, unit);
+  // The rotary axes' travel, in degrees whatever the file's units; they start at 0.
+  for (int a = 0; a < 3; ++a) {
+    const std::string axis(1, static_cast<char>('A' + a));
+    if (!t.contains(axis)) continue;
+    const json& r = t[axis];
+    if (m.kinematics.rotaryAxes().find(axis) == std::string::npos)
+      throw Error(path + ": \"travel\": \"" + axis + "\" is not a rotary axis of this machine (" +
+                  (m.kinematics.rotary()
+                       ? "its kinematics " + std::string(kinematicsTypeName(m.kinematics.type)) +
+                             " turns " + m.kinematics.rotaryAxes()
+                       : std::string("it has no \"kinematics\"")) +
+                  ")");
+    if (!r.is_array() || r.size() != 2 || !r[0].is_number() || !r[1].is_number() ||
+        !std::isfinite(r[0].get<double>()) || !std::isfinite(r[1].get<double>()) ||
+        !(r[0].get<double>() <= r[1].get<double>()))
+      throw Error(path + ": \"travel." + axis +
+                  "\" must be [min, max] in degrees, min not above max, found " + r.dump());
+    m.rotaryMin[a] = r[0].get<double>();
+    m.rotaryMax[a] = r[1].get<double>();
+    if (m.rotaryMin[a] > 0.0 || m.rotaryMax[a] < 0.0)
+      throw Error(path + ": \"travel." + axis +
+                  "\" must hold 0 (the rotary axes start there), found " + r.dump());
+  }
   return m;
 }
 

@@ -12,7 +12,8 @@
 ///     "g30": [-300, 0, 0],
 ///     "start": [0, 0, 0],               // the tool tip when the program starts, or "g28",
 ///                                       // "g30" (default: 0, 0, 0, the machine's home)
-///     "travel": {"min": [-400, -300, -150], "max": [0, 0, 0]},  // optional
+///     "travel": {"min": [-400, -300, -150], "max": [0, 0, 0],  // optional, as is each
+///                "A": [-120, 30]},                 // rotary axis's, degrees
 ///     "kinematics": {"type": "table-ac",   // optional: the rotary axes' chain
 ///                    "rot_point": [0, 0, -50], "offset": [0, 0, 12], "tcp": false}
 ///   }
@@ -23,6 +24,11 @@
 /// offset from C's; "pivot_length" (head types, required) from the head's pivot to the tool
 /// tip; "tcp" whether the controller holds the tip (X, Y, Z are the tip on the part). Without
 /// it, rotary motion is refused; with it, rotary words of axes the chain lacks are.
+///
+/// "travel": the joints' limits. X, Y, Z's are checked at every move's end and, where the
+/// controller holds the tip while the rotary axes turn (its joints then move unevenly), at
+/// every degree of the turn; a rotary axis's (degrees, whatever "units" says; it must hold 0,
+/// where the axes start) at every move's ends.
 ///
 /// Positions are machine coordinates. Every problem (unknown key, wrong shape, a start
 /// outside the travel) is an Error naming the file and the key.

@@ -277,3 +277,31 @@ TEST_CASE("G43.5 words the controller refuses", "[gcode]") {
   CHECK_THROWS_WITH(readProgramText("G21\nG43.5 H1\nG1 X1 J1 F100\nM2\n", "flat5.ngc", {}),
                     Contains("flat5.ngc:3:7: expected the machine's rotary axes to turn the tool"));
 }
+
+TEST_CASE("the rotary axes' travel, and the joints' on their way while the tip is held",
+          "[gcode]") {
+  ReaderOptions o;
+  MachineSetup m;
+  m.name = "a.json";
+  m.kinematics.type = Kinematics::Type::TableA;  // A about X through the work origin
+  m.rotaryMin = {-100.0, 0.0, 0.0};
+  m.rotaryMax = {95.0, 0.0, 0.0};
+  o.machine = m;
+  CHECK_NOTHROW(readProgramText("G21\nG0 A-100\nG0 A95\nM2\n", "in.ngc", o));
+  CHECK_THROWS_WITH(readProgramText("G21\nG0 A-90\nG0 A96\nM2\n", "a.ngc", o),
+                    Contains("a.ngc:3:1: expected moves within the travel of the machine (a.json: "
+                             "A -100 deg to 95 deg), found one to A 96 deg"));
+  // The tip held at (0, 0, 50) while A turns -90 -> 90: the joints are Rx(A) (0, 0, 50) =
+  // (0, -50 sin A, 50 cos A), Z 0 at both ends and 50 at A0, half way. Z's travel to 40.
+  o.machine->limited = true;
+  o.machine->travelMin = {-100.0, -100.0, -100.0};
+  o.machine->travelMax = {100.0, 100.0, 40.0};
+  const std::string turn = "G21 G90\nG0 A-90\nG43.4 H1\nG0 X0 Y0 Z50\nG1 A90 F1000\nM2\n";
+  CHECK_THROWS_WITH(readProgramText(turn, "held.ngc", o),
+                    Contains("held.ngc:5:1: expected moves within the travel of the machine "
+                             "(a.json: Z -100 mm to 40 mm, machine coordinates), found one "
+                             "through Z 50 mm on its way, the rotary axes turning"));
+  // Its ends alone are within: A -90 (0, 50, 0) and A90 (0, -50, 0).
+  o.machine->travelMax.z() = 50.0;
+  CHECK_NOTHROW(readProgramText(turn, "held.ngc", o));
+}

@@ -102,3 +102,26 @@ TEST_CASE("a machine's kinematics: the chain, its points in the file's units, it
   CHECK_THAT(errorOf(R"({"kinematics": {"type": "table-a", "tcp": "yes"}})"),
              Contains("\"kinematics.tcp\" must be true or false"));
 }
+
+TEST_CASE("a machine's rotary travel: degrees, on the chain's axes only", "[machine]") {
+  const test::TempFolder dir("machine_rotary_travel");
+  // Degrees whatever the units; X, Y, Z's travel may be left out.
+  const MachineSetup m = readMachine(dir.write("ac.json", R"({"units": "in",
+      "travel": {"A": [-120, 30]}, "kinematics": {"type": "table-ac"}})"));
+  CHECK(m.rotaryMin.x() == -120.0);
+  CHECK(m.rotaryMax.x() == 30.0);
+  CHECK(std::isinf(m.rotaryMin.z()));  // C: no limit given
+  CHECK_FALSE(m.limited);
+  CHECK_THAT(errorOf(R"({"travel": {"B": [-90, 90]}, "kinematics": {"type": "table-ac"}})"),
+             Contains("\"travel\": \"B\" is not a rotary axis of this machine (its kinematics "
+                      "table-ac turns AC)"));
+  CHECK_THAT(errorOf(R"({"travel": {"A": [-90, 90]}})"),
+             Contains("\"A\" is not a rotary axis of this machine (it has no \"kinematics\")"));
+  CHECK_THAT(errorOf(R"({"travel": {"A": [30, -30]}, "kinematics": {"type": "table-a"}})"),
+             Contains("\"travel.A\" must be [min, max] in degrees, min not above max"));
+  CHECK_THAT(errorOf(R"({"travel": {"A": [10, 90]}, "kinematics": {"type": "table-a"}})"),
+             Contains("\"travel.A\" must hold 0 (the rotary axes start there), found [10,90]"));
+  CHECK_THAT(errorOf(R"({"travel": {"min": [0, 0, 0]}})"), Contains("\"travel\" must be"));
+  CHECK_THAT(errorOf(R"({"travel": {"U": [0, 1]}})"),
+             Contains("\"travel\": unknown key \"U\" (expected min, max, A, B, C)"));
+}
