@@ -200,7 +200,9 @@ std::vector<bool> changedMoves(const Toolpath& path, const FeedPlan& plan) {
         throw Error("feed plan of move " + std::to_string(i + 1) + " (line " +
                     std::to_string(m.line) +
                     "): pieces must end at increasing fractions in (0, 1]");
-      if (!(std::isfinite(p.feed) && p.feed > 0.0) || !(std::isfinite(p.scale) && p.scale >= 0.0))
+      // (A scaled piece of a move whose tip stands still has no tip feed.)
+      if (!(std::isfinite(p.feed) && (p.feed > 0.0 || p.scale > 0.0)) ||
+          !(std::isfinite(p.scale) && p.scale >= 0.0))
         throw Error("feed plan of move " + std::to_string(i + 1) + " (line " +
                     std::to_string(m.line) + "): feeds must be positive");
       previous = p.until;

@@ -180,7 +180,7 @@ Verification verifySchedule(const RunResult& r) {
     LimitCheck c{option, d, limit, 0.0, 0, true};
     for (std::size_t i = 0; i < sim.steps.size(); ++i) {
       const StepRecord& s = sim.steps[i];
-      if (s.kind == MoveKind::Rapid || !(s.feed > 0.0)) continue;
+      if (s.kind == MoveKind::Rapid || !(s.feed > 0.0 || stillStep(s))) continue;
       const double x = value(i);
       if (x > c.worst) {  // NaN (no model) never wins
         c.worst = x;

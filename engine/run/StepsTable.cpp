@@ -17,12 +17,15 @@ const char* sideName(PathSide s) {
 
 double feedScale(const RunResult& result, std::size_t i) {
   const double programmed = result.sim.steps[i].feed;
+  if (stillStep(result.sim.steps[i])) return result.plan.stillScale[i];
   return programmed > 0.0 ? result.plan.feed[i] / programmed : 0.0;
 }
 
 double scheduledAcceleration(const RunResult& result, std::size_t i) {
   const auto& steps = result.sim.steps;
-  if (i == 0 || steps[i].kind == MoveKind::Rapid || steps[i - 1].kind == MoveKind::Rapid)
+  // The tip's: none where it stands still (or on its first step after standing).
+  if (i == 0 || steps[i].kind == MoveKind::Rapid || steps[i - 1].kind == MoveKind::Rapid ||
+      !(steps[i].length > 0.0) || stillStep(steps[i - 1]))
     return 0.0;
   return tangentialAcceleration(result.plan.speed[i - 1], result.plan.speed[i], steps[i].length);
 }

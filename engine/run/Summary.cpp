@@ -525,7 +525,9 @@ std::string unmetLimits(const RunResult& result) {
             ": at the lowest feed allowed line " +
             std::to_string(result.sim.steps[worst->step].line) + " still carries " +
             formatQuantity(worst->load, k.dimension, sys) + " at " +
-            formatQuantity(worst->feed, Dimension::Feed, sys);
+            (worst->feed > 0.0 ? formatQuantity(worst->feed, Dimension::Feed, sys)
+                               : std::string("a tenth of its programmed rate (the tool turning "
+                                             "about its standing tip)"));
   }
   return text;
 }

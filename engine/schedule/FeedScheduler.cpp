@@ -292,6 +292,8 @@ const char* bindingName(Binding b) {
       return "unmodelled";
     case Binding::Jerk:
       return "jerk";
+    case Binding::StillTip:
+      return "still_tip";
   }
   return "none";
 }
@@ -305,6 +307,28 @@ double mrrForForce(double force, double specificEnergy, double diameter, double 
   return force * cuttingSpeed(diameter, spindleRpm) / (1000.0 * specificEnergy);
 }
 
+bool stillStep(const StepRecord& s) {
+  return s.kind != MoveKind::Rapid && !(s.feed > 0.0) && s.dt > 0.0;
+}
+
+double physicsScale(const StepLoad& l, const ScheduleOptions& o, Binding& which) {
+  // The share each limit allows: the chip grows as the feed, torque and power as
+  // T_cut s^p + T_edge, the peak force as its kept values (CuttingForces.h).
+  double scale = std::numeric_limits<double>::infinity();
+  auto lower = [&](double s, Binding b) {
+    if (s < scale) {
+      scale = s;
+      which = b;
+    }
+  };
+  if (o.maxChip > 0.0 && l.hMax > 0.0) lower(o.maxChip / l.hMax, Binding::Chip);
+  if (o.maxForce > 0.0) lower(scaleForPeak(l, o.maxForce), Binding::Force);
+  if (o.maxTorque > 0.0) lower(scaleForTorque(l, o.maxTorque), Binding::Torque);
+  if (o.maxPower > 0.0 && l.torque > 0.0)
+    lower(scaleForTorque(l, o.maxPower * l.torque / l.power), Binding::Power);
+  return scale;
+}
+
 void physicsCaps(const SimulationResult& sim, const ScheduleOptions& o, std::vector<double>& cap,
                  std::vector<Binding>& which) {
   const auto& st = sim.steps;
@@ -314,19 +338,7 @@ void physicsCaps(const SimulationResult& sim, const ScheduleOptions& o, std::vec
   for (std::size_t i = 0; i < st.size(); ++i) {
     const StepLoad& l = sim.loads[i];
     if (!isFeedStep(st[i]) || std::isnan(l.hMax)) continue;
-    // The feed each limit allows: the chip grows as the feed, torque and power as
-    // T_cut s^p + T_edge, the peak force as its kept values (CuttingForces.h).
-    auto lower = [&](double scale, Binding b) {
-      if (st[i].feed * scale < cap[i]) {
-        cap[i] = st[i].feed * scale;
-        which[i] = b;
-      }
-    };
-    if (o.maxChip > 0.0 && l.hMax > 0.0) lower(o.maxChip / l.hMax, Binding::Chip);
-    if (o.maxForce > 0.0) lower(scaleForPeak(l, o.maxForce), Binding::Force);
-    if (o.maxTorque > 0.0) lower(scaleForTorque(l, o.maxTorque), Binding::Torque);
-    if (o.maxPower > 0.0 && l.torque > 0.0)
-      lower(scaleForTorque(l, o.maxPower * l.torque / l.power), Binding::Power);
+    cap[i] = st[i].feed * physicsScale(l, o, which[i]);
   }
 }
 
@@ -613,6 +625,52 @@ void planPieces(const Toolpath& path, const SimulationResult& sim, double minCha
   }
 }
 
+/// The moves that turn the tool about its standing tip (stillStep): each one piece, its
+/// programmed rate scaled by the least of its steps' shares that hold the MRR target and the
+/// physics limits, between kFeedMinShare and 1 (Schedule::stillScale); a step whose limit
+/// holds only below kFeedMinShare is unmet (UnmetLimit::feed 0: the share, not a feed).
+void stillScales(const SimulationResult& sim, const ScheduleOptions& o, Schedule& out) {
+  const auto& st = sim.steps;
+  out.stillScale.assign(st.size(), 0.0);
+  std::vector<std::pair<double, Binding>> own(st.size(), {1.0, Binding::StillTip});
+  std::map<std::size_t, std::pair<double, Binding>> ofMove;  // move: scale, what sets it
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    const StepRecord& s = st[i];
+    if (!stillStep(s)) continue;
+    std::pair<double, Binding>& share = own[i];
+    const auto target = out.targets.find(s.tool);
+    const double mrr = stepLoad(s, o);
+    if (o.mrrTarget && target != out.targets.end() && target->second > 0.0 && mrr > target->second)
+      share = {target->second / mrr, Binding::None};
+    if (o.physicsLimits() && i < sim.loads.size() && !std::isnan(sim.loads[i].hMax)) {
+      Binding which = Binding::None;
+      const double limit = physicsScale(sim.loads[i], o, which);
+      if (limit < share.first) share = {limit, which};
+    }
+    const auto [it, made] = ofMove.try_emplace(s.move, share);
+    if (share.first < it->second.first) it->second = share;
+    if (physicsBinding(share.second) && share.first < kFeedMinShare)
+      for (const PhysicsLimit& k : kPhysicsLimits)
+        if (k.binding == share.second)
+          out.unmet.push_back({i, k.binding, o.*k.value,
+                               limitedLoad(scaleLoad(sim.loads[i], kFeedMinShare), k.binding),
+                               0.0});
+  }
+  for (auto& [move, share] : ofMove) {
+    if (share.first < kFeedMinShare) share = {kFeedMinShare, Binding::FeedMin};
+    out.plan[move] = {{1.0, 0.0, share.first}};
+    ++out.fWords;
+  }
+  for (std::size_t i = 0; i < st.size(); ++i)
+    if (stillStep(st[i])) {
+      const auto& [scale, which] = ofMove.at(st[i].move);
+      out.stillScale[i] = scale;
+      out.binding[i] = which;
+      out.timeBefore += st[i].dt;
+      out.timeAfter += st[i].dt / scale;
+    }
+}
+
 }  // namespace
 
 Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
@@ -656,6 +714,7 @@ Schedule scheduleFeeds(const Toolpath& path, const SimulationResult& sim,
     programmed[i] = st[i].feed;
   out.timeBefore = feedTime(sim, programmed, o.acceleration, o.jerk);
   out.timeAfter = feedTime(sim, out.feed, o.acceleration, o.jerk);
+  stillScales(sim, o, out);
   out.rapidTime = rapidTime(path, o.rapidFeed, o.acceleration, o.jerk);
   out.speed = machineSpeeds(sim, out.feed, o.acceleration, o.jerk);
   for (std::size_t i = 1; i < st.size(); ++i)

@@ -94,7 +94,10 @@ enum class Binding {
   Torque,
   Power,
   Unmodelled,
-  Jerk  ///< held to brake in time by the jerk limit, where the acceleration alone would not
+  Jerk,  ///< held to brake in time by the jerk limit, where the acceleration alone would not
+  /// The tool turning about its standing tip (stillStep): its rate never above the programmed
+  /// one, for no rotary rate limit is known to raise it to.
+  StillTip
 };
 
 /// One physics limit of a schedule: what a step it binds is marked, the option that sets it,
@@ -147,10 +150,14 @@ struct Schedule {
   std::vector<double> feed;       ///< per step: the scheduled (commanded) feed
   std::vector<double> speed;      ///< per step: the machine's speed (machineSpeeds), mm/min
   std::vector<Binding> binding;   ///< per step: what keeps it from `wanted`
-  FeedPlan plan;                  ///< per move: the pieces for GcodeWriter
-  double timeBefore = 0.0;        ///< feed-move time with the programmed feeds, s
-  double timeAfter = 0.0;         ///< with the scheduled feeds, s
-  double rapidTime = 0.0;  ///< rapids at ScheduleOptions::rapidFeed (the same before and after), s
+  /// Per step: for a stillStep, the scale of its move's programmed rate (one per move: the
+  /// least of kFeedMinShare .. 1 that holds its steps' MRR at the target and their loads
+  /// within the physics limits); 0 for other steps.
+  std::vector<double> stillScale;
+  FeedPlan plan;            ///< per move: the pieces for GcodeWriter
+  double timeBefore = 0.0;  ///< feed-move time with the programmed feeds, s
+  double timeAfter = 0.0;   ///< with the scheduled feeds, s
+  double rapidTime = 0.0;   ///< rapids at ScheduleOptions::rapidFeed (the same before and after), s
   double maxAcceleration = 0.0;  ///< largest |Eq 24 acceleration| of `speed`, mm/s^2
   std::size_t fWords = 0;        ///< feed pieces in the plan
   double feedMax = 0.0;  ///< the highest feed it may command (--feed-max, else 2 x programmed)
@@ -168,6 +175,16 @@ struct Schedule {
 /// measured MRR of a steady arc in the dexel stock varies by 0.55 % (sd) at the default cell,
 /// the voxel stock's by 0.01 %.
 double loadNoise(const SimulationResult& sim, const std::vector<double>& wanted);
+
+/// A step whose tool tip stands still on the part while the rotary axes turn the tool about it
+/// (a feed move of A, B or C alone under tool-centre-point control): it takes time and may
+/// cut at no tip feed. Its move's rate (degrees per minute, or inverse time) is scheduled as a
+/// whole: Schedule::stillScale.
+bool stillStep(const StepRecord& s);
+
+/// The share of a step's feed (or rate) at which its physics limits hold (infinite where none
+/// binds), and which limit sets it (`which`, unchanged where none).
+double physicsScale(const StepLoad& l, const ScheduleOptions& o, Binding& which);
 
 /// Per step of `sim` (which has loads) the feed its physics limits allow, mm/min (infinite
 /// where none binds or no load is modelled), and which limit sets it (`which`).

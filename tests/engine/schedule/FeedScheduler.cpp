@@ -746,6 +746,75 @@ TEST_CASE("a load limit below what the lowest feed gives is reported, with that 
   CHECK(scheduleFeeds(path, loadedRun(1, 3), o).unmet.empty());
 }
 
+TEST_CASE("a move that turns the tool about its standing tip: one scale of its rate, at most 1",
+          "[schedule]") {
+  // Move 0 cuts 10 mm at 100 mm/min (MRR 500); move 1 turns A 90 deg at F100 (deg/min: 54 s)
+  // with the tip still, in 5 steps of 10.8 s cutting at 100, 200, 800, 400 and 100 mm^3/min.
+  const std::string source = "G21 G90 G94\nG1 X10 F100\nG1 A90 F100\nM2\n";
+  const Toolpath path = readProgramText(source, "still.ngc");
+  REQUIRE(path.moves.size() == 2);
+  SimulationResult sim = straightRun(10, 100.0, [](int) { return 500.0; });
+  const double mrr[5] = {100.0, 200.0, 800.0, 400.0, 100.0};
+  for (int k = 0; k < 5; ++k) {
+    StepRecord s;
+    s.move = 1;
+    s.line = 3;
+    s.kind = MoveKind::Line;
+    s.t0 = k / 5.0;
+    s.t1 = (k + 1) / 5.0;
+    s.arcLength = 10.0;
+    s.end = {10.0, 0.0, 0.0};
+    s.dt = 10.8;
+    s.mrr = mrr[k];
+    s.removed = mrr[k] * s.dt / 60.0;
+    sim.steps.push_back(s);
+  }
+  for (std::size_t i = 0; i < sim.steps.size(); ++i)
+    CHECK(stillStep(sim.steps[i]) == (i >= 10));
+  ScheduleOptions o;
+  o.targetMrr = 500.0;
+  // The 800 mm^3/min step wants 500 / 800 of the rate: the move's one scale, 0.625.
+  const Schedule sc = scheduleFeeds(path, sim, o);
+  REQUIRE(sc.plan[1].size() == 1);
+  CHECK(sc.plan[1][0].scale == Approx(0.625).epsilon(1e-12));
+  for (std::size_t i = 10; i < 15; ++i) {
+    CHECK(sc.stillScale[i] == Approx(0.625).epsilon(1e-12));
+    CHECK(sc.binding[i] == Binding::None);
+  }
+  CHECK(sc.stillScale[0] == 0.0);
+  // Its 54 s become 54 / 0.625 = 86.4 s; move 0 runs at 100 mm/min (on target) both times.
+  CHECK(sc.timeBefore == Approx(6.0 + 54.0).epsilon(1e-12));
+  CHECK(sc.timeAfter == Approx(6.0 + 86.4).epsilon(1e-12));
+  const std::string out = writeProgram(source, path, sc.plan);
+  CHECK(out == "G21 G90 G94\nG1 X10 F100\nG1 A90 F62.5\nM2\n");
+  // A target above every step: the programmed rate, never faster (no rotary rate limit known).
+  o.targetMrr = 1000.0;
+  const Schedule light = scheduleFeeds(path, sim, o);
+  CHECK(light.plan[1][0].scale == 1.0);
+  CHECK(light.binding[12] == Binding::StillTip);
+  // A force limit on a load of 80 + 20 s N: 90 N at s = 0.5; 81 N only below the lowest share,
+  // a tenth (82 N there): the scale 0.1 and each step unmet, its feed 0 (a share, not a feed).
+  sim.loads.assign(sim.steps.size(), linearPeakLoad());
+  o.mrrTarget = false;
+  o.maxForce = 90.0;
+  const Schedule forced = scheduleFeeds(path, sim, o);
+  CHECK(forced.plan[1][0].scale == Approx(0.5).epsilon(1e-12));
+  CHECK(forced.binding[12] == Binding::Force);
+  CHECK(forced.unmet.empty());
+  o.maxForce = 81.0;
+  const Schedule unmet = scheduleFeeds(path, sim, o);
+  CHECK(unmet.plan[1][0].scale == Approx(0.1).epsilon(1e-12));
+  CHECK(unmet.binding[12] == Binding::FeedMin);
+  std::size_t still = 0;
+  for (const UnmetLimit& u : unmet.unmet)
+    if (u.step >= 10) {
+      ++still;
+      CHECK(u.load == Approx(82.0).epsilon(1e-12));
+      CHECK(u.feed == 0.0);
+    }
+  CHECK(still == 5);
+}
+
 TEST_CASE("every schedule re-simulates its re-fed program against each limit",
           "[schedule][physics]") {
   // The slot of the load-limit case above (peak force 106 N at the programmed feed, 77 N of
