@@ -378,8 +378,7 @@ void VoxelStock::writeDexelStockVdbAt(const DexelStock& rays, const std::string&
   initVdb();
   const double h = rays.resolution();
   const FloatGrid::Ptr fractions = coarseDexelFractions(rays, factor);
-  std::vector<std::array<float, 3>> seeds = isoSurface(*fractions, 0.0).points;
-  const FloatGrid::Ptr surface = surfaceLevelSet(*fractions, factor * h, 3, std::move(seeds));
+  const FloatGrid::Ptr surface = surfaceLevelSet(*fractions, factor * h, 3);
   // The box the voxels at h would cover (fileBounds), the fractions' factor.
   const ColumnFootprint corner(rays);
   int iLow = rays.raysX(), iHigh = -1, jLow = rays.raysY(), jHigh = -1;

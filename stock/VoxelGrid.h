@@ -59,13 +59,8 @@ TriangleMesh isoSurface(const FloatGrid& grid, double adaptivity, double isovalu
 void writeVdb(const std::string& path, const openvdb::GridPtrVec& grids);
 
 /// The stock's surface as a narrow-band level set (negative inside, within `halfWidth` voxels
-/// of it) of the fractions' 0.5 iso-surface, from the surface's mesh points (VoxelSurface.cpp).
-FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
-                               const std::vector<std::array<float, 3>>& points);
-/// The same from points it may drop once it has found the surface's voxels (a mesh made for
-/// this alone: its memory given back before the band is carried out).
-FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth,
-                               std::vector<std::array<float, 3>>&& points);
+/// of it) of the fractions' 0.5 iso-surface (VoxelSurface.cpp).
+FloatGrid::Ptr surfaceLevelSet(const FloatGrid& grid, double h, int halfWidth);
 
 /// The voxels of the grid's leaves whose fraction is strictly between 0 and 1.
 std::size_t partialVoxels(const FloatGrid& grid);

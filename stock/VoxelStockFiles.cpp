@@ -896,13 +896,10 @@ void VoxelStock::writeStockVdb(const std::string& path, const DexelStock* rays) 
   // grid over a whole board): it is for viewing; a run goes on from the fractions and planes.
   const int coarser = fileSurfaceFactor(grid);
   FloatGrid::Ptr surface;
-  if (coarser == 1) {
-    surface = surfaceLevelSet(grid, h, 3, impl_->surfaceMesh()->points);
-  } else {
-    const FloatGrid::Ptr averaged = boxFiltered(grid, h, coarser);
-    std::vector<std::array<float, 3>> seeds = isoSurface(*averaged, 0.0).points;
-    surface = surfaceLevelSet(*averaged, coarser * h, 3, std::move(seeds));
-  }
+  if (coarser == 1)
+    surface = surfaceLevelSet(grid, h, 3);
+  else
+    surface = surfaceLevelSet(*boxFiltered(grid, h, coarser), coarser * h, 3);
   // The partial voxels' planes (or the stock box's faces), for a run that goes on from here.
   openvdb::Vec3SGrid::Ptr planes[3];
   for (int i = 0; i < 3; ++i) {
