@@ -364,22 +364,41 @@ std::vector<Coord> crossingVoxels(const FloatGrid& grid) {
   auto inLeaf = [&](const Coord& c) { return acc.probeConstLeaf(c) != nullptr; };
   for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf) {
     const Coord origin = leaf->origin();
+    std::array<bool, Leaf::SIZE> in;
+    for (openvdb::Index i = 0; i < Leaf::SIZE; ++i)
+      in[i] = leaf->getValue(i) >= 0.5f;
+    // Across each face, the next leaf, or where there is none the one value there (a tile's or
+    // the background).
+    const Leaf* next[3][2];
+    bool beyond[3][2];
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < 2; ++k) {
+        Coord c = origin;
+        c[a] += k == 0 ? -1 : 8;
+        next[a][k] = acc.probeConstLeaf(c);
+        beyond[a][k] = acc.getValue(c) >= 0.5f;
+      }
     for (openvdb::Index i = 0; i < Leaf::SIZE; ++i) {
       const Coord l = Leaf::offsetToLocalCoord(i);
-      const bool inside = leaf->getValue(i) >= 0.5f;
       bool crossing = false;
       for (int a = 0; a < 3; ++a)
-        for (const int s : {-1, 1}) {
+        for (int k = 0; k < 2; ++k) {
           Coord n = l;
-          n[a] += s;
+          n[a] += k == 0 ? -1 : 1;
           if (n[a] >= 0 && n[a] < 8) {
-            crossing = crossing || (leaf->getValue(Leaf::coordToOffset(n)) >= 0.5f) != inside;
+            crossing = crossing || in[Leaf::coordToOffset(n)] != in[i];
             continue;
           }
-          const Coord c = origin + n;
-          if ((acc.getValue(c) >= 0.5f) == inside) continue;
-          crossing = true;
-          if (!inLeaf(c)) out.push_back(c);
+          const Leaf* other = next[a][k];
+          if (other) {
+            n[a] &= 7;
+            crossing = crossing || (other->getValue(Leaf::coordToOffset(n)) >= 0.5f) != in[i];
+          } else if (beyond[a][k] != in[i]) {
+            crossing = true;
+            Coord c = origin + l;
+            c[a] += k == 0 ? -1 : 1;
+            out.push_back(c);
+          }
         }
       if (crossing) out.push_back(origin + l);
     }
@@ -389,10 +408,17 @@ std::vector<Coord> crossingVoxels(const FloatGrid& grid) {
   for (; tile; ++tile) {
     if (tile.isVoxelValue() || !(*tile >= 0.5f)) continue;
     const CoordBBox b = tile.getBoundingBox();
+    const int level = static_cast<int>(tile.getLevel());
     for (int a = 0; a < 3; ++a)
       for (const int s : {-1, 1}) {
         CoordBBox face = b;
         face.min()[a] = face.max()[a] = s < 0 ? b.min()[a] : b.max()[a];
+        // A face against a material tile as large or larger (aligned: it covers the face; its
+        // depth in the tree, the root 0 and a leaf 3, at most 3 less this tile's level).
+        Coord across = face.min();
+        across[a] += s;
+        const int depth = acc.getValueDepth(across);
+        if (depth >= 0 && depth <= 3 - level && acc.getValue(across) >= 0.5f) continue;
         for (auto it = face.begin(); it; ++it) {
           Coord n = *it;
           n[a] += s;
