@@ -765,8 +765,10 @@ bool Interpreter::executeBlock(const Block& b) {
              formatNumber(w.get('E')));
   // U and W of a lathe cycle shift its profile; they are not axes there.
   if (latheCycleLine) w.otherAxes = w.has('A') || w.has('B') || w.has('C') || w.has('V');
-  // Under G43.5 the tool's axis I, J, K moves the rotary axes as their words would.
-  const bool axisWords = tcpVector_ && !g0 && (w.has('I') || w.has('J') || w.has('K'));
+  // Under G43.5 the tool's axis I, J, K moves the rotary axes as their words would (G68.2's I,
+  // J, K are its angles).
+  const bool vectorLine = tcpVector_ && !g0 && !w.hasG(G_68_2);
+  const bool axisWords = vectorLine && (w.has('I') || w.has('J') || w.has('K'));
   const bool axes = w.has('X') || w.has('Y') || w.has('Z') || w.has('@') || w.has('^') ||
                     w.otherAxes || axisWords;
   // A rotary or UVW word moves its axis only where its target differs from the axis's
@@ -793,7 +795,7 @@ bool Interpreter::executeBlock(const Block& b) {
     }
     at = to;
   }
-  if (tcpVector_ && !g0) toolVector(w, motionWord ? *motionWord : motion_);
+  if (vectorLine) toolVector(w, motionWord ? *motionWord : motion_);
   if (g0 && motionWord && axes && (*g0 == G_10 || *g0 == G_28 || *g0 == G_30 || *g0 == G_92))
     fail(w.gColumn(*g0), "expected either " + codeName('G', *g0) +
                              " or a motion on this line, found both using the axis words");

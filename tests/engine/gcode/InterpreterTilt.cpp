@@ -72,7 +72,8 @@ TEST_CASE("G68.2's origin and Euler angles put the program on the part and G53.1
 
 TEST_CASE("the tip never jumps between moves, whatever the five-axis modes switch", "[gcode]") {
   // Random programs on every chain without the controller's tip control: lines and rotary turns
-  // with G43.4 / G234 / G49, G254 / G255 and G68.2 + G53.1 / G69 switched in between. Each
+  // (under G43.5 as the tool's axis I, J, K) with G43.4 / G43.5 / G234 / G49, G254 / G255 and
+  // G68.2 + G53.1 / G69 switched in between. Each
   // switch reads the position back as the controller does (joints <-> tip, work <-> plane),
   // so where one move ends the next starts, on the part, to rounding.
   std::mt19937 rng(20261129);
@@ -85,13 +86,15 @@ TEST_CASE("the tip never jumps between moves, whatever the five-axis modes switc
     const std::string letters = k.rotaryAxes();
     for (int program = 0; program < 20; ++program) {
       std::string text = "G21 G90 G54\nG0 X0 Y0 Z60\n";
-      bool dwo = false, plane = false;
+      bool dwo = false, plane = false, vector = false;  // (vector: G43.5 in force)
       auto num = [&](double v) { return std::to_string(v); };
       for (int line = 0; line < 12; ++line) {
-        const int what = static_cast<int>(rng() % 8);
+        const int what = static_cast<int>(rng() % 9);
         if (what == 0) text += "G43.4 H1\n";
         if (what == 1) text += "G234 H1\n";
         if (what == 2) text += "G49\n";
+        if (what == 8) text += "G43.5 H1\n";
+        if (what <= 2 || what == 8) vector = what == 8;
         if (what == 3 && !plane) {
           text += dwo ? "G255\n" : "G254\n";
           dwo = !dwo;
@@ -111,9 +114,19 @@ TEST_CASE("the tip never jumps between moves, whatever the five-axis modes switc
           plane = !plane;
         }
         if (what == 5 && !dwo && !plane) {
+          // The angles, or under G43.5 the tool's axis they give (one the chain reaches).
           std::string words;
-          for (const char a : letters)
-            words += std::string(" ") + a + num(angle(rng));
+          Eigen::Vector3d abc = Eigen::Vector3d::Zero();
+          for (const char a : letters) {
+            abc[a - 'A'] = angle(rng);
+            words += std::string(" ") + a + num(abc[a - 'A']);
+          }
+          if (vector) {
+            const Eigen::Vector3d v = k.axis(abc);
+            char ijk[96];
+            std::snprintf(ijk, sizeof ijk, " I%.15f J%.15f K%.15f", v.x(), v.y(), v.z());
+            words = ijk;
+          }
           text += "G0" + words + "\n";
         }
         text += "G1 X" + num(u(rng)) + " Y" + num(u(rng)) + " Z" + num(u(rng) + 40.0) + " F500\n";
