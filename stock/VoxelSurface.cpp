@@ -162,6 +162,9 @@ void fillPlainColumns(BandBlocks& band, std::vector<std::pair<std::int32_t, std:
   }
   const std::size_t nx = static_cast<std::size_t>(x1 - x0 + 1),
                     ny = static_cast<std::size_t>(y1 - y0 + 1);
+  // (A surface whose columns' box is mostly empty, a thin slanted wall's, keeps the
+  // propagation: the columns' arrays would outgrow the band.)
+  if (nx * ny > 4 * front.size()) return;
   struct Signature {
     std::uint64_t sum = 0;
     std::uint32_t count = 0;
