@@ -91,7 +91,8 @@ void Interpreter::alignToPlane(int column) {
          "\"kinematics\"), found G53.1 on a tilted plane without them");
   }
   const Kinematics& k = options_.machine->kinematics;
-  const std::optional<Vector3d> to = k.anglesFor(want, from);
+  const MachineSetup& machine = *options_.machine;
+  const std::optional<Vector3d> to = k.anglesFor(want, from, machine.rotaryMin, machine.rotaryMax);
   if (!to) {
     auto n = [](double v) { return formatNumber(std::abs(v) < 5e-13 ? 0.0 : v); };
     fail(column, std::string("expected a tilted work plane whose Z the rotary axes of ") +
@@ -164,7 +165,8 @@ void Interpreter::toolVector(const Words& w, int mode) {
              given + " under G43.5");
   }
   const Kinematics& k = options_.machine->kinematics;
-  const std::optional<Vector3d> to = k.anglesFor(v, rotaryNow());
+  const MachineSetup& m = *options_.machine;
+  const std::optional<Vector3d> to = k.anglesFor(v, rotaryNow(), m.rotaryMin, m.rotaryMax);
   if (!to)
     fail(column, std::string("expected a tool axis the rotary axes of ") +
                      kinematicsTypeName(k.type) + " can reach, found " + given);

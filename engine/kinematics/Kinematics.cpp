@@ -142,10 +142,13 @@ Eigen::Vector3d Kinematics::joints(const Eigen::Vector3d& tip, const Eigen::Vect
 }
 
 std::optional<Eigen::Vector3d> Kinematics::anglesFor(const Eigen::Vector3d& want,
-                                                     const Eigen::Vector3d& near) const {
+                                                     const Eigen::Vector3d& near,
+                                                     const Eigen::Vector3d& lo,
+                                                     const Eigen::Vector3d& hi) const {
   // Every chain here tilts the tool by one angle (its axis's Z is the tilt's cosine) and spins
   // the tilted axis about Z by the other: both tilts, each with the spin that brings the axis
-  // round to `want`, checked through axis() itself.
+  // round to `want` (the turn nearest near's, and the turns either side of it), checked
+  // through axis() itself.
   const std::string letters = rotaryAxes();
   if (letters.empty()) {
     if ((want - Eigen::Vector3d::UnitZ()).norm() <= 1e-9) return near;
@@ -154,34 +157,44 @@ std::optional<Eigen::Vector3d> Kinematics::anglesFor(const Eigen::Vector3d& want
   const int tilt = letters[0] - 'A';
   const int spin = letters.size() > 1 ? letters[1] - 'A' : -1;
   const double tiltDeg = std::acos(std::clamp(want.z(), -1.0, 1.0)) * 180.0 / kPi;
-  std::optional<Eigen::Vector3d> best;
-  double bestCost = 0.0;
+  std::optional<Eigen::Vector3d> best, bestWithin;
+  double bestCost = 0.0, bestWithinCost = 0.0;
+  auto offer = [&](const Eigen::Vector3d& abc) {
+    if ((axis(abc) - want).norm() > 1e-9) return;
+    const double cost = (abc - near).cwiseAbs().sum();
+    if (!best || cost < bestCost - 1e-9) best = abc, bestCost = cost;
+    const bool within = ((abc - lo).array() >= -1e-9).all() && ((hi - abc).array() >= -1e-9).all();
+    if (within && (!bestWithin || cost < bestWithinCost - 1e-9))
+      bestWithin = abc, bestWithinCost = cost;
+  };
   for (const double sign : {1.0, -1.0}) {
     Eigen::Vector3d abc = near;
     abc[tilt] = sign * tiltDeg;
-    if (spin >= 0) {
-      Eigen::Vector3d at0 = abc;
-      at0[spin] = 0.0;
-      const Eigen::Vector3d v = axis(at0);
-      if (std::hypot(v.x(), v.y()) > 1e-12 && std::hypot(want.x(), want.y()) > 1e-12) {
-        const double turn =
-            (std::atan2(want.y(), want.x()) - std::atan2(v.y(), v.x())) * 180.0 / kPi;
-        // The spin's sense differs between chains: the one that lands on `want`.
-        for (const double s : {1.0, -1.0}) {
-          abc[spin] = s * turn;
-          if ((axis(abc) - want).norm() <= 1e-9) break;
-        }
-        abc[spin] += 360.0 * std::round((near[spin] - abc[spin]) / 360.0);
-      }
+    if (spin < 0) {
+      offer(abc);
+      continue;
     }
-    if ((axis(abc) - want).norm() > 1e-9) continue;
-    const double cost = (abc - near).cwiseAbs().sum();
-    if (!best || cost < bestCost - 1e-9) {
-      best = abc;
-      bestCost = cost;
+    Eigen::Vector3d at0 = abc;
+    at0[spin] = 0.0;
+    const Eigen::Vector3d v = axis(at0);
+    if (!(std::hypot(v.x(), v.y()) > 1e-12 && std::hypot(want.x(), want.y()) > 1e-12)) {
+      offer(abc);  // (upright: any spin; the present one)
+      continue;
+    }
+    const double turn = (std::atan2(want.y(), want.x()) - std::atan2(v.y(), v.x())) * 180.0 / kPi;
+    // The spin's sense differs between chains: the one that lands on `want`.
+    for (const double s : {1.0, -1.0}) {
+      abc[spin] = s * turn;
+      if ((axis(abc) - want).norm() <= 1e-9) break;
+    }
+    abc[spin] += 360.0 * std::round((near[spin] - abc[spin]) / 360.0);
+    for (const double wrap : {0.0, -360.0, 360.0}) {
+      Eigen::Vector3d turned = abc;
+      turned[spin] += wrap;
+      offer(turned);
     }
   }
-  return best;
+  return bestWithin ? bestWithin : best;
 }
 
 }  // namespace engage

@@ -318,3 +318,20 @@ TEST_CASE("the rotary axes' travel, and the joints' on their way while the tip i
   o.machine->travelMax.z() = 50.0;
   CHECK_NOTHROW(readProgramText(turn, "held.ngc", o));
 }
+
+TEST_CASE("G43.5 and G53.1 take the solution within the rotary travel", "[gcode]") {
+  // The trunnion's axis (sin A sin C, sin A cos C, cos A): (0, 0.5, sqrt(3)/2) is A30 C0, 30 deg
+  // from A0 C0, or A-30 C180 (or C-180), 210 away. With A held to -120 .. 0 the second.
+  ReaderOptions o = onMachine(Kinematics::Type::TableAC);
+  o.machine->rotaryMin = {-120.0, 0.0, -1e300};
+  o.machine->rotaryMax = {0.0, 0.0, 1e300};
+  for (const char* program : {"G21\nG43.5 H1\nG1 X1 J0.5 K0.866025403784439 F100\nM2\n",
+                              "G21\nG68.2 X0 Y0 Z0 I180 J30 K180\nG53.1\nM2\n"}) {
+    INFO(program);
+    const Toolpath p = readProgramText(program, "within.ngc", o);
+    const Move& last = p.moves.back();
+    CHECK(last.rotaryEnd.x() == Approx(-30.0).margin(1e-9));
+    CHECK(std::abs(last.rotaryEnd.z()) == Approx(180.0).margin(1e-9));
+    checkNear(o.machine->kinematics.axis(last.rotaryEnd), {0.0, 0.5, std::sqrt(0.75)});
+  }
+}

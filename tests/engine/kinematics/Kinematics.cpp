@@ -246,4 +246,19 @@ TEST_CASE("the joints for a tip, and the angles for an axis, undo the pose", "[k
   const std::optional<Eigen::Vector3d> c = ac.anglesFor(ac.axis({30.0, 0.0, 10.0}), {30, 0, 350});
   REQUIRE(c);
   checkNear(*c, {30.0, 0.0, 370.0});
+  // Within the travel: the axis of A30 C10, (sin A sin C, sin A cos C, cos A), is also A-30
+  // with C 10 + 180: C190 or C-170. From A0 C0 the nearest is A30 C10 (40 deg away); a tilt
+  // held to -120 .. 0 takes A-30 C-170 (200 away; C190 is 220); C also held to -90 .. 360
+  // takes C190; with C to 0 .. 90 no solution is within, and the nearest of all comes back.
+  const Eigen::Vector3d want = ac.axis({30.0, 0.0, 10.0}), inf = Eigen::Vector3d::Constant(1e300);
+  checkNear(*ac.anglesFor(want, Eigen::Vector3d::Zero()), {30.0, 0.0, 10.0});
+  checkNear(*ac.anglesFor(want, Eigen::Vector3d::Zero(), {-120.0, -inf.y(), -inf.z()},
+                          {0.0, inf.y(), inf.z()}),
+            {-30.0, 0.0, -170.0});
+  checkNear(*ac.anglesFor(want, Eigen::Vector3d::Zero(), {-120.0, -inf.y(), -90.0},
+                          {0.0, inf.y(), 360.0}),
+            {-30.0, 0.0, 190.0});
+  checkNear(
+      *ac.anglesFor(want, Eigen::Vector3d::Zero(), {-120.0, -inf.y(), 0.0}, {0.0, inf.y(), 90.0}),
+      {30.0, 0.0, 10.0});
 }
