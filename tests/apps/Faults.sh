@@ -97,18 +97,21 @@ run "$out"
 cpu_seconds() {  # user + system CPU time of process $1, s
   awk '{ printf "%.2f", ($14 + $15) / 100 }' "/proc/$1/stat" 2>/dev/null || echo 0
 }
-staged() {  # staged FILE: the run's staging folder in $out holds FILE (or FILE.part)
+# The run's own staging folder, .engage-partial-HOST-PID: a killed run's stays in $out until
+# the next run gets as far as making its own, and a SIGINT at the sight of it came too early
+# (in the run's simulation, or before its handler, which the background job ignores).
+staged() {  # staged PID FILE: run PID's staging folder in $out holds FILE (or FILE.part)
   local d
-  for d in "$out"/.engage-partial-*; do
-    [ -e "$d/$1" ] || [ -e "$d/$1.part" ] && return 0
+  for d in "$out"/.engage-partial-*-"$1"; do
+    [ -e "$d/$2" ] || [ -e "$d/$2.part" ] && return 0
   done
   return 1
 }
 reached() {  # reached PID EVENT: cpu:SECONDS | staging | file:NAME
   case $2 in
     cpu:*) awk -v a="$(cpu_seconds "$1")" -v b="${2#cpu:}" 'BEGIN { exit !(a >= b) }' ;;
-    staging) compgen -G "$out/.engage-partial-*" >/dev/null ;;
-    file:*) staged "${2#file:}" ;;
+    staging) compgen -G "$out/.engage-partial-*-$1" >/dev/null ;;
+    file:*) staged "$1" "${2#file:}" ;;
   esac
 }
 hits=0
@@ -194,7 +197,7 @@ for wait_after in 0.5 1.5; do
   pid=$!
   for _ in $(seq 6000); do  # the outputs begin: steps.csv staged (at most 60 s)
     kill -0 "$pid" 2>/dev/null || break
-    staged steps.csv && break
+    staged "$pid" steps.csv && break
     sleep 0.01
   done
   sleep "$wait_after"
