@@ -329,6 +329,20 @@ double physicsScale(const StepLoad& l, const ScheduleOptions& o, Binding& which)
   return scale;
 }
 
+namespace {
+
+/// Step i's physics limit `b`, met only below the lowest share allowed (`scale` of its
+/// feed): unmet, with the load it still carries there and that lowest feed (0 for a share of
+/// a rate, a stillStep's).
+void addUnmet(Schedule& out, const ScheduleOptions& o, std::size_t i, Binding b, const StepLoad& l,
+              double scale, double feed) {
+  for (const PhysicsLimit& k : kPhysicsLimits)
+    if (k.binding == b)
+      out.unmet.push_back({i, b, o.*k.value, limitedLoad(scaleLoad(l, scale), b), feed});
+}
+
+}  // namespace
+
 void physicsCaps(const SimulationResult& sim, const ScheduleOptions& o, std::vector<double>& cap,
                  std::vector<Binding>& which) {
   const auto& st = sim.steps;
@@ -477,11 +491,7 @@ void wantedFeeds(const Toolpath& path, const SimulationResult& sim, const Schedu
       }
       if (physicsBinding(out.binding[i]) && f < fMin) {
         // Met only below the lowest feed allowed: the load that remains there.
-        const Binding b = out.binding[i];
-        for (const PhysicsLimit& k : kPhysicsLimits)
-          if (k.binding == b)
-            out.unmet.push_back(
-                {i, b, o.*k.value, limitedLoad(scaleLoad(l, fMin / s.feed), b), fMin});
+        addUnmet(out, o, i, out.binding[i], l, fMin / s.feed, fMin);
       }
       const auto [around, limit] = neighbours(i);
       const double lowered = std::max(around, std::min(f, fMin));
@@ -632,12 +642,11 @@ void planPieces(const Toolpath& path, const SimulationResult& sim, double minCha
 void stillScales(const SimulationResult& sim, const ScheduleOptions& o, Schedule& out) {
   const auto& st = sim.steps;
   out.stillScale.assign(st.size(), 0.0);
-  std::vector<std::pair<double, Binding>> own(st.size(), {1.0, Binding::StillTip});
   std::map<std::size_t, std::pair<double, Binding>> ofMove;  // move: scale, what sets it
   for (std::size_t i = 0; i < st.size(); ++i) {
     const StepRecord& s = st[i];
     if (!stillStep(s)) continue;
-    std::pair<double, Binding>& share = own[i];
+    std::pair<double, Binding> share{1.0, Binding::StillTip};
     const auto target = out.targets.find(s.tool);
     const double mrr = stepLoad(s, o);
     if (o.mrrTarget && target != out.targets.end() && target->second > 0.0 && mrr > target->second)
@@ -650,11 +659,7 @@ void stillScales(const SimulationResult& sim, const ScheduleOptions& o, Schedule
     const auto [it, made] = ofMove.try_emplace(s.move, share);
     if (share.first < it->second.first) it->second = share;
     if (physicsBinding(share.second) && share.first < kFeedMinShare)
-      for (const PhysicsLimit& k : kPhysicsLimits)
-        if (k.binding == share.second)
-          out.unmet.push_back({i, k.binding, o.*k.value,
-                               limitedLoad(scaleLoad(sim.loads[i], kFeedMinShare), k.binding),
-                               0.0});
+      addUnmet(out, o, i, share.second, sim.loads[i], kFeedMinShare, 0.0);
   }
   for (auto& [move, share] : ofMove) {
     if (share.first < kFeedMinShare) share = {kFeedMinShare, Binding::FeedMin};
