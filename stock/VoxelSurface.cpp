@@ -198,8 +198,8 @@ void fillPlainColumns(BandBlocks& band, std::vector<std::pair<std::int32_t, std:
   // along x, then along y.
   const int reach = kPlainReach;
   std::vector<std::uint8_t> rowSame(nx * ny, 0), plain(nx * ny, 0);
+  std::vector<int> left(nx), right(nx), down(ny), up(ny);  // runs of equal signatures
   for (std::size_t y = 0; y < ny; ++y) {
-    std::vector<int> left(nx), right(nx);
     for (std::size_t x = 0; x < nx; ++x) {
       const std::size_t i = y * nx + x;
       left[x] = x > 0 && sig[i] == sig[i - 1] ? left[x - 1] + 1 : 1;
@@ -213,7 +213,6 @@ void fillPlainColumns(BandBlocks& band, std::vector<std::pair<std::int32_t, std:
           sig[y * nx + x].count > 0 && sig[y * nx + x].level && left[x] > reach && right[x] > reach;
   }
   for (std::size_t x = 0; x < nx; ++x) {
-    std::vector<int> down(ny), up(ny);
     auto same = [&](std::size_t y, std::size_t other) {
       return rowSame[y * nx + x] && rowSame[other * nx + x] &&
              sig[y * nx + x] == sig[other * nx + x];

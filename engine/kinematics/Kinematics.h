@@ -29,6 +29,7 @@
 
 #include <Eigen/Core>
 
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -71,12 +72,11 @@ struct Kinematics {
   /// two solutions the one nearest `near` (C taken to the turn nearest near's, or the turn
   /// before or after it) that lies within [lo, hi] (degrees, per axis), else the nearest of
   /// all; nullopt where this chain cannot point the tool that way (a 4th axis off its plane).
-  std::optional<Eigen::Vector3d> anglesFor(
-      const Eigen::Vector3d& axis, const Eigen::Vector3d& near,
-      const Eigen::Vector3d& lo = Eigen::Vector3d::Constant(-kUnlimited),
-      const Eigen::Vector3d& hi = Eigen::Vector3d::Constant(kUnlimited)) const;
-  /// No travel limit, degrees.
-  static constexpr double kUnlimited = 1e300;
+  std::optional<Eigen::Vector3d> anglesFor(const Eigen::Vector3d& axis, const Eigen::Vector3d& near,
+                                           const Eigen::Vector3d& lo = Eigen::Vector3d::Constant(
+                                               -std::numeric_limits<double>::infinity()),
+                                           const Eigen::Vector3d& hi = Eigen::Vector3d::Constant(
+                                               std::numeric_limits<double>::infinity())) const;
   /// The tool's axis on the part for angles `abc` (degrees): pose(xyz, abc).axis for any xyz.
   Eigen::Vector3d axis(const Eigen::Vector3d& abc) const;
   /// The rotation that takes the part frame to the machine's (a table's turn; the identity for
